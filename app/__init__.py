@@ -1,0 +1,1 @@
+"""tillpath's I/O layer: the web application, storage and the command line."""

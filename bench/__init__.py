@@ -1,0 +1,1 @@
+"""Benchmarks against the budgets of product.md §11 (run with ``make bench``)."""

@@ -1,0 +1,135 @@
+"""Value types shared by the planner stages, the exporters and their callers.
+
+Coordinates here are WGS84 ``(lon, lat)`` in degrees: these types are what leaves the planner.
+Local metric geometry stays inside the stage modules.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Literal
+
+from shapely import Polygon
+
+Objective = Literal["shortest_path", "fewest_lines"]
+WaypointRole = Literal["start", "line_start", "line_end", "turn", "headland", "finish"]
+SegmentKind = Literal["transit", "line", "turn", "headland"]
+
+OBJECTIVES: tuple[Objective, ...] = ("shortest_path", "fewest_lines")
+
+#: The paper's tractor (Quick G1000) works at 0.56 m/s.
+DEFAULT_SPEED_MPS = 0.56
+#: Track width of a walk-behind tractor [m]: it pivots about one braked wheel.
+DEFAULT_TRACK_WIDTH_M = 1.8
+
+
+@dataclass(frozen=True, slots=True)
+class Machine:
+    """The tractor and implement as the planner sees them.
+
+    Attributes
+    ----------
+    working_width_m : float
+        Effective width of the puddler [m]: the interval between tillage lines.
+    speed_mps : float
+        Working speed [m/s], for time estimates.
+    track_width_m : float
+        Distance between the wheels [m]. A walk-behind tractor turns by pulling one clutch, so
+        it pivots about that wheel at ``speed_mps / track_width_m`` rad/s.
+    """
+
+    working_width_m: float
+    speed_mps: float = DEFAULT_SPEED_MPS
+    track_width_m: float = DEFAULT_TRACK_WIDTH_M
+
+
+@dataclass(frozen=True, slots=True)
+class Waypoint:
+    """One point of the route, in driving order (the paper's p_s, p_0 … p_n, p_f).
+
+    Attributes
+    ----------
+    seq : int
+        Position in the route, from 0.
+    lon, lat : float
+        WGS84 degrees.
+    role : str
+        ``start``, ``line_start``, ``line_end``, ``turn``, ``headland`` or ``finish``.
+    line : int or None
+        Index of the tillage line the point begins or ends, else None.
+    """
+
+    seq: int
+    lon: float
+    lat: float
+    role: WaypointRole
+    line: int | None
+
+
+@dataclass(frozen=True, slots=True)
+class PathSegment:
+    """A piece of the route between waypoints, with what the tractor does on it.
+
+    Attributes
+    ----------
+    kind : str
+        ``transit`` (start or finish leg), ``line`` (tilling), ``turn`` (between lines or
+        cells) or ``headland`` (a pass around the boundary).
+    index : int or None
+        Line index for ``line``, pass index for ``headland``, else None.
+    lonlat : tuple of (float, float)
+        The segment's vertices, WGS84 ``(lon, lat)``.
+    """
+
+    kind: SegmentKind
+    index: int | None
+    lonlat: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class PlanStats:
+    """The figures of a plan (product.md §3, "Output")."""
+
+    area_m2: float
+    line_count: int
+    waypoint_count: int
+    working_length_m: float
+    turn_length_m: float
+    transit_length_m: float
+    path_length_m: float
+    coverage_ratio: float
+    angle_deg: float
+    estimated_time_s: float
+    planning_ms: float
+
+    def as_dict(self) -> dict[str, float | int]:
+        """Return the figures as a plain dict, in declaration order."""
+        return asdict(self)
+
+
+@dataclass(frozen=True, slots=True)
+class CoveragePlan:
+    """A planned route over a field.
+
+    Attributes
+    ----------
+    field_lonlat : Polygon
+        The field as given (WGS84), holes included.
+    waypoints : tuple of Waypoint
+        The route τ = [p_s, p_0, …, p_n, p_f] in driving order.
+    segments : tuple of PathSegment
+        The same route cut into transit legs, tillage lines, turns and headland passes.
+    stats : PlanStats
+        The plan's figures.
+    interval_m : float
+        Distance between tillage lines [m].
+    cells_lonlat : tuple of Polygon
+        The cells the field was split into (one for a convex field), WGS84.
+    """
+
+    field_lonlat: Polygon
+    waypoints: tuple[Waypoint, ...]
+    segments: tuple[PathSegment, ...]
+    stats: PlanStats
+    interval_m: float
+    cells_lonlat: tuple[Polygon, ...] = ()
