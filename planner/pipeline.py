@@ -1,12 +1,283 @@
-"""plan_coverage(): chains the planner stages (being written)."""
+"""plan_coverage(): validate, project, search the heading and order, build the route.
+
+This module only chains the stages; the geometry lives in the stage modules.
+"""
 
 from __future__ import annotations
 
+import time
+from dataclasses import dataclass, field
 from typing import Any
 
-from planner.types import CoveragePlan
+import numpy as np
+import numpy.typing as npt
+import shapely
+from shapely import LinearRing, Polygon
+
+from planner import angles, validation
+from planner.coverage import cell_area, convex_chains, covered_area
+from planner.headlands import headland_rings, inner_field
+from planner.lines import from_sweep, scan_cell, to_sweep
+from planner.ordering import ordered_line_ends, variant_lengths
+from planner.projection import LocalFrame, field_frame, geodesic_area_m2
+from planner.turns import pivot_time_s
+from planner.types import (
+    DEFAULT_SPEED_MPS,
+    DEFAULT_TRACK_WIDTH_M,
+    CoveragePlan,
+    PathSegment,
+    PlanStats,
+    SegmentKind,
+    Waypoint,
+    WaypointRole,
+)
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Waypoints are rounded to 1e-9° (0.1 mm), so every export carries the same numbers.
+LONLAT_DECIMALS = 9
 
 
-def plan_coverage(*args: Any, **kwargs: Any) -> CoveragePlan:
-    """Plan a coverage path (the implementation lands with the planner core)."""
-    raise NotImplementedError
+def plan_coverage(
+    field_lonlat: Polygon,
+    *,
+    interval_m: float,
+    start_lonlat: Any = None,
+    finish_lonlat: Any = None,
+    angle_deg: float | None = None,
+    objective: str = "shortest_path",
+    headland_passes: int = 0,
+    speed_mps: float = DEFAULT_SPEED_MPS,
+    track_width_m: float = DEFAULT_TRACK_WIDTH_M,
+) -> CoveragePlan:
+    """Plan the back-and-forth tillage path over a field.
+
+    Parameters
+    ----------
+    field_lonlat : Polygon
+        Field boundary, WGS84 ``(lon, lat)``.
+    interval_m : float
+        Distance between tillage lines, the puddler's working width [m], 0.2–50.
+    start_lonlat, finish_lonlat : (float, float), optional
+        Where the tractor enters and must end (within 5 km of the field).
+    angle_deg : float, optional
+        Line heading, degrees clockwise from true north in [0, 180); searched if None.
+    objective : {"shortest_path", "fewest_lines"}
+        What the heading and order search minimises.
+    headland_passes : int
+        Rounds along the inside of the boundary, 0–5, driven after the lines.
+    speed_mps : float
+        Working speed [m/s], for the time estimate.
+    track_width_m : float
+        Wheel track [m]; sets how long a pivot turn takes.
+
+    Returns
+    -------
+    CoveragePlan
+
+    Raises
+    ------
+    PlannerError
+        With the input and the problem named, for any request that cannot be planned.
+
+    Examples
+    --------
+    >>> from shapely import Polygon
+    >>> field = Polygon([(115.298, -8.6265), (115.29813989, -8.62649238),
+    ...                  (115.29814712, -8.62631751), (115.29800448, -8.62632237)])
+    >>> plan = plan_coverage(field, interval_m=4.0)
+    >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]]
+    (4, ['line_start', 'line_end', 'line_start'])
+    """
+    started = time.perf_counter()
+    interval = validation.validate_interval(interval_m)
+    fixed_heading = validation.validate_angle(angle_deg)
+    goal = validation.validate_objective(objective)
+    passes = validation.validate_headland_passes(headland_passes)
+    speed = validation.validate_speed(speed_mps)
+    field_lonlat = validation.validate_field(field_lonlat)
+
+    frame = field_frame(field_lonlat)
+    field_local = frame.to_local(field_lonlat)
+    start_xy = validation.validate_point(
+        start_lonlat, input_name="start", frame=frame, field_local=field_local
+    )
+    finish_xy = validation.validate_point(
+        finish_lonlat, input_name="finish", frame=frame, field_local=field_local
+    )
+    validation.require_convex(field_local)
+
+    cell = inner_field(field_local, passes=passes, interval_m=interval)
+    rings = headland_rings(field_local, passes=passes, interval_m=interval)
+    ring_xy = np.asarray(shapely.orient_polygons(cell).exterior.coords)[:-1]
+
+    headings = angles.candidate_headings(ring_xy, fixed_heading)
+    headings = angles.affordable_headings(ring_xy, headings, interval)
+    scan = scan_cell(ring_xy, headings, interval)
+    # Lines end at the cell; with headland passes the route goes on from the last line.
+    after_lines = _ring_entry(rings[-1], None) if rings else None
+    lengths = variant_lengths(scan, start_xy, after_lines if rings else finish_xy)
+    best, variant = angles.select_plan(lengths, scan.counts, goal)
+    heading = float(headings[best])
+
+    lines = slice(scan.offsets[best], scan.offsets[best + 1])
+    u, v_lo, v_hi = scan.u[lines], scan.v_lo[lines], scan.v_hi[lines]
+    route = _Route()
+    if start_xy is not None:
+        route.add("start", None, [start_xy])
+    _add_lines(route, heading, u, v_lo, v_hi, variant)
+    for pass_index, ring in reversed(list(enumerate(rings))):
+        _add_headland(route, ring, pass_index)
+    if finish_xy is not None:
+        route.add("finish", None, [finish_xy])
+
+    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
+    chains = convex_chains(u_ring, v_ring)
+    field_area_local = float(field_local.area)
+    covered = covered_area(chains, u, v_lo, v_hi, interval)
+    if passes:
+        covered += field_area_local - cell_area(chains)  # the bands the passes fill
+    return _assemble(
+        route,
+        frame=frame,
+        field_lonlat=field_lonlat,
+        cells_local=[cell],
+        interval_m=interval,
+        heading_deg=heading,
+        line_count=len(u),
+        coverage_ratio=covered / field_area_local,
+        speed_mps=speed,
+        track_width_m=track_width_m,
+        started=started,
+    )
+
+
+@dataclass
+class _Route:
+    """The route under construction, in local metres, with the role of every point."""
+
+    x: list[float] = field(default_factory=list)
+    y: list[float] = field(default_factory=list)
+    roles: list[WaypointRole] = field(default_factory=list)
+    lines: list[int | None] = field(default_factory=list)
+    # (kind, index, first waypoint, last waypoint); a segment shares its ends with neighbours.
+    segments: list[tuple[SegmentKind, int | None, int, int]] = field(default_factory=list)
+
+    def add(self, role: WaypointRole, line: int | None, points: Any) -> None:
+        for px, py in points:
+            self.x.append(float(px))
+            self.y.append(float(py))
+            self.roles.append(role)
+            self.lines.append(line)
+
+    def extend(
+        self,
+        x: FloatArray,
+        y: FloatArray,
+        roles: list[WaypointRole],
+        lines: list[int | None],
+    ) -> None:
+        self.x.extend(x.tolist())
+        self.y.extend(y.tolist())
+        self.roles.extend(roles)
+        self.lines.extend(lines)
+
+
+def _add_lines(
+    route: _Route, heading: float, u: FloatArray, v_lo: FloatArray, v_hi: FloatArray, variant: int
+) -> None:
+    u_ord, v_from, v_to, index = ordered_line_ends(u, v_lo, v_hi, variant)
+    n = len(u_ord)
+    x, y = from_sweep(np.repeat(u_ord, 2), np.stack([v_from, v_to], axis=1).ravel(), heading)
+    first = len(route.x)
+    if first:
+        route.segments.append(("transit", None, first - 1, first))
+    route.extend(x, y, ["line_start", "line_end"] * n, np.repeat(index, 2).tolist())
+    for k in range(n):
+        route.segments.append(("line", int(index[k]), first + 2 * k, first + 2 * k + 1))
+        if k + 1 < n:
+            route.segments.append(("turn", None, first + 2 * k + 1, first + 2 * k + 2))
+
+
+def _ring_entry(ring: LinearRing, from_xy: tuple[float, float] | None) -> tuple[float, float]:
+    """The point of ``ring`` nearest ``from_xy`` (its first vertex if None)."""
+    if from_xy is None:
+        x0, y0 = ring.coords[0]
+        return float(x0), float(y0)
+    point = ring.interpolate(ring.project(shapely.Point(from_xy)))
+    return float(point.x), float(point.y)
+
+
+def _add_headland(route: _Route, ring: LinearRing, pass_index: int) -> None:
+    """Drive ``ring`` once round, entering where it is nearest the tractor."""
+    here = (route.x[-1], route.y[-1]) if route.x else None
+    entry = _ring_entry(ring, here)
+    coords = np.asarray(ring.coords)[:-1]
+    distance_along = shapely.line_locate_point(ring, shapely.points(coords))
+    at = float(ring.project(shapely.Point(entry)))
+    order = np.argsort((distance_along - at) % ring.length, kind="stable")
+    loop = [entry, *[tuple(c) for c in coords[order] if np.hypot(*(c - entry)) > 1e-9], entry]
+    first = len(route.x)
+    if first:
+        route.segments.append(("turn", None, first - 1, first))
+    route.add("headland", None, loop)
+    route.segments.append(("headland", pass_index, first, len(route.x) - 1))
+
+
+def _assemble(
+    route: _Route,
+    *,
+    frame: LocalFrame,
+    field_lonlat: Polygon,
+    cells_local: list[Polygon],
+    interval_m: float,
+    heading_deg: float,
+    line_count: int,
+    coverage_ratio: float,
+    speed_mps: float,
+    track_width_m: float,
+    started: float,
+) -> CoveragePlan:
+    x, y = np.asarray(route.x), np.asarray(route.y)
+    if route.segments and route.roles[-1] == "finish":
+        route.segments.append(("transit", None, len(x) - 2, len(x) - 1))
+    lon, lat = frame.to_lonlat_xy(x, y)
+    lon = np.round(lon, LONLAT_DECIMALS)
+    lat = np.round(lat, LONLAT_DECIMALS)
+    lon_list, lat_list = lon.tolist(), lat.tolist()
+    waypoints = tuple(
+        Waypoint(seq, lon_list[seq], lat_list[seq], route.roles[seq], route.lines[seq])
+        for seq in range(len(x))
+    )
+    step = np.hypot(np.diff(x), np.diff(y))
+    lengths = {"line": 0.0, "turn": 0.0, "transit": 0.0, "headland": 0.0}
+    segments = []
+    for kind, index, first, last in route.segments:
+        lengths[kind] += float(step[first:last].sum())
+        coords = tuple(zip(lon_list[first : last + 1], lat_list[first : last + 1], strict=True))
+        segments.append(PathSegment(kind, index, coords))
+    path_length = float(step.sum())
+    estimated_time = path_length / speed_mps + pivot_time_s(
+        x, y, speed_mps=speed_mps, track_width_m=track_width_m
+    )
+    stats = PlanStats(
+        area_m2=round(geodesic_area_m2(field_lonlat), 2),
+        line_count=line_count,
+        waypoint_count=len(waypoints),
+        working_length_m=round(lengths["line"] + lengths["headland"], 3),
+        turn_length_m=round(lengths["turn"], 3),
+        transit_length_m=round(lengths["transit"], 3),
+        path_length_m=round(path_length, 3),
+        coverage_ratio=round(min(coverage_ratio, 1.0), 6),
+        angle_deg=round(heading_deg % 180.0, 6),
+        estimated_time_s=round(estimated_time, 1),
+        planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
+    )
+    return CoveragePlan(
+        field_lonlat=field_lonlat,
+        waypoints=waypoints,
+        segments=tuple(segments),
+        stats=stats,
+        interval_m=interval_m,
+        cells_lonlat=tuple(frame.to_lonlat(cell) for cell in cells_local),
+    )

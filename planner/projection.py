@@ -177,6 +177,10 @@ def field_frame(field_lonlat: BaseGeometry) -> LocalFrame:
 
 
 def geodesic_area_m2(polygon_lonlat: BaseGeometry) -> float:
-    """Return the area of a WGS84 polygon on the ellipsoid [m²] (holes subtracted)."""
-    area, _ = WGS84.geometry_area_perimeter(polygon_lonlat)
+    """Return the area of a WGS84 polygon on the ellipsoid [m²] (holes subtracted).
+
+    pyproj signs each ring's area by its orientation, so the polygon is oriented first
+    (exterior counter-clockwise, holes clockwise) for the holes to be subtracted.
+    """
+    area, _ = WGS84.geometry_area_perimeter(shapely.orient_polygons(polygon_lonlat))
     return abs(float(area))

@@ -6,9 +6,12 @@ does not pay for importing the web server.
 
 from __future__ import annotations
 
+import sys
+
 import typer
 
 from app.cli import plan, server, simulate
+from app.cli.common import EXIT_BAD_INPUT
 
 cli = typer.Typer(
     name="tillpath",
@@ -23,5 +26,19 @@ server.register(cli)
 
 
 def main() -> None:
-    """Entry point of the ``tillpath`` script."""
-    cli()
+    """Entry point of the ``tillpath`` script.
+
+    Usage errors (a missing file argument, a non-number where a number belongs) are printed
+    as ``error: …`` with exit status 2, like the planner's own input errors.
+    """
+    try:
+        result = cli(standalone_mode=False)
+    except typer.Abort:
+        typer.echo("aborted", err=True)
+        sys.exit(130)
+    except typer.TyperException as exc:
+        # typer vendors click: its UsageError/BadParameter derive from TyperException.
+        message = exc.format_message() if hasattr(exc, "format_message") else str(exc)
+        typer.echo(f"error: {message}", err=True)
+        sys.exit(getattr(exc, "exit_code", EXIT_BAD_INPUT))
+    sys.exit(result if isinstance(result, int) else 0)

@@ -1,0 +1,120 @@
+"""``tillpath plan``: plan a field file and write the plan (product.md §10)."""
+
+from __future__ import annotations
+
+import json
+from enum import Enum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from app.cli.common import fail, read_json_file, write_output
+
+
+class OutputFormat(str, Enum):
+    """Formats ``tillpath plan`` writes."""
+
+    geojson = "geojson"
+    gpx = "gpx"
+    csv = "csv"
+    json = "json"
+
+
+class ObjectiveChoice(str, Enum):
+    """What the heading and order search minimises."""
+
+    shortest_path = "shortest_path"
+    fewest_lines = "fewest_lines"
+
+
+def parse_lonlat(text: str | None, *, option: str) -> tuple[float, float] | None:
+    """Parse ``LON,LAT`` from the command line, failing with a clear message."""
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return float(parts[0]), float(parts[1])
+    except ValueError:
+        fail(f"{option}: expected LON,LAT in degrees (e.g. 115.2980,-8.6265), got {text!r}")
+
+
+def plan_command(
+    field: Annotated[
+        Path, typer.Argument(metavar="FIELD", help="GeoJSON file with the field polygon.")
+    ],
+    interval: Annotated[
+        float | None,
+        typer.Option("--interval", help="Distance between tillage lines [m]; default: the file's interval_m."),
+    ] = None,
+    start: Annotated[
+        str | None, typer.Option("--start", metavar="LON,LAT", help="Where the tractor enters.")
+    ] = None,
+    finish: Annotated[
+        str | None, typer.Option("--finish", metavar="LON,LAT", help="Where it must end.")
+    ] = None,
+    angle: Annotated[
+        float | None,
+        typer.Option("--angle", help="Line heading [deg from true north, 0–180); default: searched."),
+    ] = None,
+    objective: Annotated[
+        ObjectiveChoice, typer.Option("--objective", help="What to minimise.")
+    ] = ObjectiveChoice.shortest_path,
+    headland: Annotated[
+        int, typer.Option("--headland", help="Headland passes around the inside, 0–5.")
+    ] = 0,
+    output_format: Annotated[
+        OutputFormat, typer.Option("--format", help="Output format.")
+    ] = OutputFormat.geojson,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Write here instead of stdout.")
+    ] = None,
+) -> None:
+    """Plan the back-and-forth path over FIELD; figures go to stderr, the plan to stdout or -o."""
+    from planner import PlannerError, parse_field_geojson, plan_coverage
+    from planner.export import plan_to_csv, plan_to_geojson, plan_to_gpx, plan_to_waypoints_json
+
+    document = read_json_file(field, what="FIELD")
+    try:
+        spec = parse_field_geojson(document)
+        interval_m = interval if interval is not None else spec.interval_m
+        if interval_m is None:
+            fail("interval_m: give --interval (the field file has no interval_m property)")
+        plan = plan_coverage(
+            spec.field_lonlat,
+            interval_m=interval_m,
+            start_lonlat=parse_lonlat(start, option="--start") or spec.start_lonlat,
+            finish_lonlat=parse_lonlat(finish, option="--finish") or spec.finish_lonlat,
+            angle_deg=angle,
+            objective=objective.value,
+            headland_passes=headland,
+        )
+    except PlannerError as exc:
+        fail(str(exc))
+    name = spec.name or field.stem
+    if output_format is OutputFormat.geojson:
+        text = json.dumps(plan_to_geojson(plan, name=name), indent=1)
+    elif output_format is OutputFormat.gpx:
+        text = plan_to_gpx(plan, name=name)
+    elif output_format is OutputFormat.csv:
+        text = plan_to_csv(plan)
+    else:
+        text = json.dumps(plan_to_waypoints_json(plan), indent=1)
+    write_output(text, output)
+    s = plan.stats
+    typer.echo(
+        f"{name}: {s.line_count} lines, {s.waypoint_count} waypoints, "
+        f"area {s.area_m2:,.1f} m², path {s.path_length_m:,.1f} m "
+        f"(lines {s.working_length_m:,.1f}, turns {s.turn_length_m:,.1f}, "
+        f"transit {s.transit_length_m:,.1f}), heading {s.angle_deg:.1f}°, "
+        f"coverage {s.coverage_ratio:.1%}, about {s.estimated_time_s / 60:.1f} min, "
+        f"planned in {s.planning_ms:.1f} ms",
+        err=True,
+    )
+
+
+def register(cli: typer.Typer) -> None:
+    """Add ``plan`` to ``cli``."""
+    cli.command("plan")(plan_command)

@@ -1,0 +1,170 @@
+"""Coverage (R4): how much of a cell the lines' footprints till, computed exactly.
+
+A footprint is a line buffered by ``interval/2`` with flat caps: in the sweep frame, the
+rectangle ``[u - d/2, u + d/2] × [v_lo, v_hi]``. The covered area of a cell is the integral,
+across the sweep, of the length of ``[lo(u), hi(u)] ∩ [v_lo, v_hi]``, where ``lo`` and ``hi``
+are the cell's lower and upper chains. Both chains are piecewise linear, so the integral is
+exact when cut at their vertices and where they cross the footprint's ends. This costs
+O(lines + vertices) in numpy, where intersecting 1,000 footprints with shapely costs ~25 ms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Vertices this close across the sweep count as one end of the cell [m].
+_TIE_M = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class Chains:
+    """A sweep-monotone cell as its lower and upper boundary, in one sweep frame [m].
+
+    Attributes
+    ----------
+    lo_u, lo_v : ndarray
+        Lower chain, ``u`` non-decreasing.
+    hi_u, hi_v : ndarray
+        Upper chain, ``u`` non-decreasing.
+    """
+
+    lo_u: FloatArray
+    lo_v: FloatArray
+    hi_u: FloatArray
+    hi_v: FloatArray
+
+    @property
+    def u_min(self) -> float:
+        """Left end of the cell."""
+        return float(min(self.lo_u[0], self.hi_u[0]))
+
+    @property
+    def u_max(self) -> float:
+        """Right end of the cell."""
+        return float(max(self.lo_u[-1], self.hi_u[-1]))
+
+
+def convex_chains(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
+    """Split a counter-clockwise convex ring (sweep frame, not closed) into its chains.
+
+    Examples
+    --------
+    >>> c = convex_chains(np.array([0.0, 4.0, 4.0, 0.0]), np.array([0.0, 0.0, 3.0, 3.0]))
+    >>> c.lo_v.tolist(), c.hi_v.tolist()
+    ([0.0, 0.0], [3.0, 3.0])
+    """
+    m = len(u_ring)
+    # An edge parallel to the lines at either end belongs to neither chain: the lower chain
+    # runs bottom-left to bottom-right, the upper one top-left to top-right.
+    at_min = u_ring <= u_ring.min() + _TIE_M
+    at_max = u_ring >= u_ring.max() - _TIE_M
+    lo_start = int(np.argmin(np.where(at_min, v_ring, np.inf)))
+    lo_end = int(np.argmin(np.where(at_max, v_ring, np.inf)))
+    hi_start = int(np.argmax(np.where(at_max, v_ring, -np.inf)))
+    hi_end = int(np.argmax(np.where(at_min, v_ring, -np.inf)))
+    lower = (lo_start + np.arange((lo_end - lo_start) % m + 1)) % m
+    upper = ((hi_start + np.arange((hi_end - hi_start) % m + 1)) % m)[::-1]
+    # Rounding can make a chain step back by 1e-15 m; np.interp needs it monotone.
+    return Chains(
+        lo_u=np.maximum.accumulate(u_ring[lower]),
+        lo_v=v_ring[lower],
+        hi_u=np.maximum.accumulate(u_ring[upper]),
+        hi_v=v_ring[upper],
+    )
+
+
+def covered_area(
+    chains: Chains, u: FloatArray, v_lo: FloatArray, v_hi: FloatArray, interval_m: float
+) -> float:
+    """Area of the cell covered by the footprints of its lines [m²].
+
+    Parameters
+    ----------
+    chains : Chains
+        The cell.
+    u, v_lo, v_hi : ndarray, shape (n,)
+        Its lines, left to right, as :func:`planner.lines.scan_cell` places them.
+    interval_m : float
+        Footprint width [m].
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    A 16 m × 20 m rectangle with four lines is covered completely:
+
+    >>> c = convex_chains(np.array([0.0, 16.0, 16.0, 0.0]), np.array([0.0, 0.0, 20.0, 20.0]))
+    >>> covered_area(c, np.array([2.0, 6.0, 10.0, 14.0]), np.zeros(4), np.full(4, 20.0), 4.0)
+    320.0
+    """
+    d = float(interval_m)
+    half = d / 2.0
+    n = len(u)
+    if n == 0:
+        return 0.0
+    # Strips tile the sweep except the last two, which overlap when the last line sits
+    # nearer its neighbour (R2): add both, subtract their common part once.
+    first = _covered(chains, u[: n - 1] - half, u[: n - 1] + half, v_lo[: n - 1], v_hi[: n - 1])
+    last = _covered(chains, u[n - 1 :] - half, u[n - 1 :] + half, v_lo[n - 1 :], v_hi[n - 1 :])
+    overlap = 0.0
+    if n >= 2 and u[n - 1] - u[n - 2] < d:
+        overlap = _covered(
+            chains,
+            u[n - 1 :] - half,
+            u[n - 2 : n - 1] + half,
+            np.maximum(v_lo[n - 2 : n - 1], v_lo[n - 1 :]),
+            np.minimum(v_hi[n - 2 : n - 1], v_hi[n - 1 :]),
+        )
+    return first + last - overlap
+
+
+def cell_area(chains: Chains) -> float:
+    """Area between the chains [m²] (the cell's area)."""
+    grid = np.unique(np.concatenate([chains.lo_u, chains.hi_u]))
+    height = np.interp(grid, chains.hi_u, chains.hi_v) - np.interp(grid, chains.lo_u, chains.lo_v)
+    return float(np.sum((height[1:] + height[:-1]) / 2.0 * np.diff(grid)))
+
+
+def _covered(
+    chains: Chains, s0: FloatArray, s1: FloatArray, a: FloatArray, b: FloatArray
+) -> float:
+    """Σ_k ∫_{s0_k}^{s1_k} max(0, min(hi, b_k) − max(lo, a_k)) du, for disjoint sorted strips."""
+    if len(s0) == 0:
+        return 0.0
+    u_min, u_max = chains.u_min, chains.u_max
+    cuts = np.concatenate([chains.lo_u, chains.hi_u, s0, s1])
+    cuts = np.unique(np.clip(cuts, u_min, u_max))
+    left, right = cuts[:-1], cuts[1:]
+    mid = (left + right) / 2.0
+    k = np.searchsorted(s0, mid, side="right") - 1
+    inside = (k >= 0) & (mid < s1[np.maximum(k, 0)])
+    left, right, k = left[inside], right[inside], k[inside]
+    width = right - left
+    lo0 = np.interp(left, chains.lo_u, chains.lo_v)
+    lo1 = np.interp(right, chains.lo_u, chains.lo_v)
+    hi0 = np.interp(left, chains.hi_u, chains.hi_v)
+    hi1 = np.interp(right, chains.hi_u, chains.hi_v)
+    ak, bk = a[k], b[k]
+    # Cut each piece where hi crosses b or lo crosses a: between cuts the covered height
+    # min(hi, b) − max(lo, a) is linear, and its positive part integrates in closed form.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_hi = np.clip(np.nan_to_num((bk - hi0) / (hi1 - hi0), nan=0.0), 0.0, 1.0)
+        t_lo = np.clip(np.nan_to_num((ak - lo0) / (lo1 - lo0), nan=0.0), 0.0, 1.0)
+    t = np.sort(np.stack([np.zeros_like(t_hi), t_hi, t_lo, np.ones_like(t_hi)], axis=1), axis=1)
+    height = np.minimum(hi0[:, None] + t * (hi1 - hi0)[:, None], bk[:, None]) - np.maximum(
+        lo0[:, None] + t * (lo1 - lo0)[:, None], ak[:, None]
+    )
+    g0, g1 = height[:, :-1], height[:, 1:]
+    dt = np.diff(t, axis=1) * width[:, None]
+    high, low = np.maximum(g0, g1), np.minimum(g0, g1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        crossing = np.where(high > 0, dt * high * high / (2.0 * (high - low)), 0.0)
+    area = np.where(low >= 0, dt * (g0 + g1) / 2.0, np.where(high <= 0, 0.0, crossing))
+    return float(area.sum())

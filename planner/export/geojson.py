@@ -1,0 +1,128 @@
+"""GeoJSON (RFC 7946) for a plan, and back.
+
+One FeatureCollection: the field (``kind: field``), its cells (``cell``), one LineString per
+tillage line (``line``, ``index``), turns (``turn``), headland passes (``headland``,
+``index``), start and finish legs (``transit``), the whole route (``path``) and a Point per
+waypoint (``waypoint``, ``seq``, ``role``, ``line``). The plan's figures are the collection's
+``properties``, except ``planning_ms``, which is a measurement of the run, not of the plan:
+leaving it out keeps the file the same byte for byte for the same request (R7).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from shapely.geometry import mapping
+
+from planner.errors import InvalidFieldError
+from planner.fields import parse_field_geojson
+from planner.types import CoveragePlan, PathSegment, PlanStats, Waypoint
+
+_ROLES = {"start", "line_start", "line_end", "turn", "headland", "finish"}
+_SEGMENT_KINDS = ("transit", "line", "turn", "headland")
+
+
+def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str, Any]:
+    """Return ``plan`` as a GeoJSON FeatureCollection (a ``dict`` ready for ``json.dumps``).
+
+    Parameters
+    ----------
+    plan : CoveragePlan
+    name : str, optional
+        Stored in the collection's properties.
+    """
+    features: list[dict[str, Any]] = [_feature(mapping(plan.field_lonlat), kind="field")]
+    for index, cell in enumerate(plan.cells_lonlat):
+        features.append(_feature(mapping(cell), kind="cell", index=index))
+    for segment in plan.segments:
+        geometry = {"type": "LineString", "coordinates": [list(p) for p in segment.lonlat]}
+        if segment.kind in ("line", "headland"):
+            features.append(_feature(geometry, kind=segment.kind, index=segment.index))
+        else:
+            features.append(_feature(geometry, kind=segment.kind))
+    if len(plan.waypoints) >= 2:
+        path = [[w.lon, w.lat] for w in plan.waypoints]
+        features.append(_feature({"type": "LineString", "coordinates": path}, kind="path"))
+    for w in plan.waypoints:
+        features.append(
+            _feature(
+                {"type": "Point", "coordinates": [w.lon, w.lat]},
+                kind="waypoint",
+                seq=w.seq,
+                role=w.role,
+                line=w.line,
+            )
+        )
+    stats = plan.stats.as_dict()
+    del stats["planning_ms"]
+    properties: dict[str, Any] = {"name": name, "interval_m": plan.interval_m, **stats}
+    return {"type": "FeatureCollection", "properties": properties, "features": features}
+
+
+def plan_from_geojson(obj: Any) -> CoveragePlan:
+    """Read a plan written by :func:`plan_to_geojson`.
+
+    Raises
+    ------
+    InvalidFieldError
+        If ``obj`` is not a tillpath plan (no field, or no waypoints).
+    """
+    if not isinstance(obj, Mapping) or obj.get("type") != "FeatureCollection":
+        raise InvalidFieldError("plan", "must be a GeoJSON FeatureCollection written by tillpath")
+    by_kind: dict[str, list[Mapping[str, Any]]] = {}
+    for feature in obj.get("features") or []:
+        kind = (feature.get("properties") or {}).get("kind")
+        by_kind.setdefault(str(kind), []).append(feature)
+    if len(by_kind.get("field", [])) != 1 or not by_kind.get("waypoint"):
+        raise InvalidFieldError("plan", "holds no tillpath plan (a field and waypoints)")
+    field_feature = dict(by_kind["field"][0])
+    field_feature["properties"] = {}
+    field_lonlat = parse_field_geojson(field_feature).field_lonlat
+    waypoints = []
+    for feature in sorted(by_kind["waypoint"], key=lambda f: int(f["properties"]["seq"])):
+        props = feature["properties"]
+        lon, lat = feature["geometry"]["coordinates"][:2]
+        role = props.get("role")
+        if role not in _ROLES:
+            raise InvalidFieldError("plan", f"waypoint {props.get('seq')} has unknown role {role!r}")
+        line = props.get("line")
+        waypoints.append(
+            Waypoint(int(props["seq"]), float(lon), float(lat), role, None if line is None else int(line))
+        )
+    segments = []
+    for feature in obj["features"]:
+        kind = feature["properties"].get("kind")
+        if kind in _SEGMENT_KINDS:
+            coords = tuple((float(p[0]), float(p[1])) for p in feature["geometry"]["coordinates"])
+            segments.append(PathSegment(kind, feature["properties"].get("index"), coords))
+    cells = tuple(
+        parse_field_geojson({**f, "properties": {}}).field_lonlat for f in by_kind.get("cell", [])
+    )
+    props = obj.get("properties") or {}
+    stats = PlanStats(**{k: props.get(k, 0) for k in PlanStats.__slots__})
+    return CoveragePlan(
+        field_lonlat=field_lonlat,
+        waypoints=tuple(waypoints),
+        segments=tuple(segments),
+        stats=stats,
+        interval_m=float(props.get("interval_m", 0.0)),
+        cells_lonlat=cells,
+    )
+
+
+def _feature(geometry: Mapping[str, Any], **properties: Any) -> dict[str, Any]:
+    return {"type": "Feature", "properties": properties, "geometry": _lists(geometry)}
+
+
+def _lists(geometry: Mapping[str, Any]) -> dict[str, Any]:
+    """shapely's mapping() gives tuples; JSON wants lists (and tests compare equal)."""
+    return {"type": geometry["type"], "coordinates": _to_lists(geometry["coordinates"])}
+
+
+def _to_lists(value: Any) -> Any:
+    if isinstance(value, (list, tuple)):
+        if value and isinstance(value[0], (int, float)):
+            return list(value)
+        return [_to_lists(v) for v in value]
+    return value

@@ -1,0 +1,228 @@
+"""Check a planning request before any geometry is built.
+
+Each check raises a :class:`~planner.errors.PlannerError` subclass whose message names the
+input and the problem, e.g. ``field: polygon is self-intersecting near (115.29813, -8.62641)``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+import numpy as np
+import shapely
+from shapely import Point, Polygon
+
+from planner.errors import InvalidFieldError, InvalidParameterError
+from planner.projection import UTM_LAT_RANGE_DEG, LocalFrame, geodesic_area_m2
+from planner.types import OBJECTIVES, Objective
+
+INTERVAL_RANGE_M = (0.2, 50.0)
+SPEED_RANGE_MPS = (0.05, 10.0)
+HEADLAND_PASSES_MAX = 5
+MIN_AREA_M2 = 1.0
+MAX_AREA_M2 = 2000.0 * 10_000.0
+MAX_POINT_DISTANCE_M = 5_000.0
+#: A vertex within this distance of the convex hull does not make a field non-convex [m].
+CONVEXITY_TOLERANCE_M = 1e-3
+
+_WHERE = re.compile(r"\[\s*(-?[\d.eE+-]+)\s+(-?[\d.eE+-]+)\s*\]")
+
+
+def validate_field(field_lonlat: Any) -> Polygon:
+    """Return ``field_lonlat`` if it is a plannable WGS84 polygon.
+
+    Parameters
+    ----------
+    field_lonlat : Polygon
+        Field boundary in WGS84 ``(lon, lat)``; holes are obstacles.
+
+    Returns
+    -------
+    Polygon
+        The same polygon, normalised (exterior counter-clockwise, holes clockwise).
+
+    Raises
+    ------
+    InvalidFieldError
+        If it is not a polygon, has fewer than 3 distinct vertices, non-finite or
+        out-of-range coordinates, is self-intersecting or otherwise invalid, or its area is
+        not more than 1 m² and at most 2,000 ha.
+    """
+    if not isinstance(field_lonlat, Polygon):
+        kind = getattr(field_lonlat, "geom_type", type(field_lonlat).__name__)
+        raise InvalidFieldError("field", f"must be a Polygon, not {kind}")
+    if field_lonlat.is_empty:
+        raise InvalidFieldError("field", "polygon is empty")
+    coords = shapely.get_coordinates(field_lonlat)
+    if not np.isfinite(coords).all():
+        raise InvalidFieldError("field", "a coordinate is not a finite number")
+    lon, lat = coords[:, 0], coords[:, 1]
+    if (np.abs(lon) > 180.0).any() or (np.abs(lat) > 90.0).any():
+        bad = int(np.argmax((np.abs(lon) > 180.0) | (np.abs(lat) > 90.0)))
+        raise InvalidFieldError(
+            "field",
+            f"({lon[bad]}, {lat[bad]}) is not a [longitude, latitude] in degrees "
+            "(longitude must be within ±180 and latitude within ±90; GeoJSON puts longitude first)",
+        )
+    if lat.min() < UTM_LAT_RANGE_DEG[0] or lat.max() > UTM_LAT_RANGE_DEG[1]:
+        raise InvalidFieldError(
+            "field", "latitude is outside the 80°S to 84°N range that tillpath plans in"
+        )
+    exterior = np.asarray(field_lonlat.exterior.coords)[:-1]
+    if len(np.unique(exterior, axis=0)) < 3:
+        raise InvalidFieldError("field", "polygon needs at least 3 distinct vertices")
+    reason = shapely.is_valid_reason(field_lonlat)
+    if reason != "Valid Geometry":
+        raise InvalidFieldError("field", _describe_invalid(reason))
+    area_m2 = geodesic_area_m2(field_lonlat)
+    if area_m2 <= MIN_AREA_M2:
+        raise InvalidFieldError(
+            "field", f"area is {area_m2:.3g} m², too small to plan (it must be more than 1 m²)"
+        )
+    if area_m2 > MAX_AREA_M2:
+        raise InvalidFieldError(
+            "field",
+            f"area is {area_m2 / 10_000:,.0f} ha; tillpath plans fields up to 2,000 ha at once",
+        )
+    # A canonical vertex order (normalize) and orientation keep plans deterministic (R7).
+    return shapely.orient_polygons(shapely.normalize(field_lonlat))  # type: ignore[no-any-return]
+
+
+def _describe_invalid(reason: str) -> str:
+    match = _WHERE.search(reason)
+    where = f" near ({float(match[1]):.6f}, {float(match[2]):.6f})" if match else ""
+    if "Self-intersection" in reason:
+        return f"polygon is self-intersecting{where}"
+    if "Hole lies outside shell" in reason:
+        return f"a hole lies outside the field boundary{where}"
+    if "Nested holes" in reason:
+        return f"a hole lies inside another hole{where}"
+    if "Interior is disconnected" in reason:
+        return f"the holes cut the field into separate pieces{where}"
+    if "Too few points" in reason:
+        return f"a ring has too few distinct points{where}"
+    return f"polygon is not valid: {reason}"
+
+
+def require_convex(field_local: Polygon) -> None:
+    """Refuse a field the convex-only planner cannot plan.
+
+    Raises
+    ------
+    InvalidFieldError
+        If ``field_local`` has holes, or a vertex lies more than 1 mm inside its convex hull.
+    """
+    if field_local.interiors:
+        raise InvalidFieldError(
+            "field",
+            f"field has {len(field_local.interiors)} hole(s); obstacles inside a field are "
+            "not supported yet",
+        )
+    hull = field_local.convex_hull
+    depth_m = shapely.hausdorff_distance(field_local.exterior, hull.exterior)
+    if depth_m > CONVEXITY_TOLERANCE_M:
+        raise InvalidFieldError(
+            "field",
+            f"field is not convex: its boundary bends inwards by {depth_m:.2f} m; "
+            "only convex fields are supported yet",
+        )
+
+
+def validate_interval(interval_m: Any) -> float:
+    """Return ``interval_m`` [m] if it is a number within 0.2–50 m."""
+    value = _number("interval_m", interval_m)
+    low, high = INTERVAL_RANGE_M
+    if not (low <= value <= high):
+        raise InvalidParameterError(
+            "interval_m", f"must be between {low:g} and {high:g} m, got {value:g}"
+        )
+    return value
+
+
+def validate_angle(angle_deg: Any) -> float | None:
+    """Return ``angle_deg`` if it is None or a heading in [0, 180) degrees."""
+    if angle_deg is None:
+        return None
+    value = _number("angle_deg", angle_deg)
+    if not (0.0 <= value < 180.0):
+        raise InvalidParameterError(
+            "angle_deg", f"must be at least 0 and less than 180 degrees, got {value:g}"
+        )
+    return value
+
+
+def validate_objective(objective: Any) -> Objective:
+    """Return ``objective`` if it is one of :data:`~planner.types.OBJECTIVES`."""
+    for known in OBJECTIVES:
+        if objective == known:
+            return known
+    raise InvalidParameterError(
+        "objective", f"must be one of {', '.join(OBJECTIVES)}, got {objective!r}"
+    )
+
+
+def validate_headland_passes(headland_passes: Any) -> int:
+    """Return ``headland_passes`` if it is a whole number from 0 to 5."""
+    if isinstance(headland_passes, bool) or not isinstance(headland_passes, (int, np.integer)):
+        raise InvalidParameterError(
+            "headland_passes", f"must be a whole number from 0 to 5, got {headland_passes!r}"
+        )
+    if not (0 <= headland_passes <= HEADLAND_PASSES_MAX):
+        raise InvalidParameterError(
+            "headland_passes", f"must be from 0 to 5, got {headland_passes}"
+        )
+    return int(headland_passes)
+
+
+def validate_speed(speed_mps: Any) -> float:
+    """Return ``speed_mps`` [m/s] if it is within 0.05–10 m/s."""
+    value = _number("speed_mps", speed_mps)
+    low, high = SPEED_RANGE_MPS
+    if not (low <= value <= high):
+        raise InvalidParameterError(
+            "speed_mps", f"must be between {low:g} and {high:g} m/s, got {value:g}"
+        )
+    return value
+
+
+def validate_point(
+    point_lonlat: Any, *, input_name: str, frame: LocalFrame, field_local: Polygon
+) -> tuple[float, float] | None:
+    """Return the local ``(x, y)`` [m] of a start or finish point, or None if not given.
+
+    Raises
+    ------
+    InvalidParameterError
+        If the point is malformed, not finite, or more than 5 km from the field.
+    """
+    if point_lonlat is None:
+        return None
+    if not isinstance(point_lonlat, (tuple, list)) or len(point_lonlat) != 2:
+        raise InvalidParameterError(input_name, "must be a [lon, lat] pair")
+    lon = _number(input_name, point_lonlat[0])
+    lat = _number(input_name, point_lonlat[1])
+    if abs(lon) > 180.0 or abs(lat) > 90.0:
+        raise InvalidParameterError(
+            input_name, f"({lon}, {lat}) is not a [longitude, latitude] in degrees"
+        )
+    x, y = frame.to_local_xy(lon, lat)
+    xy = (float(x), float(y))
+    distance_m = field_local.distance(Point(xy)) if math.isfinite(xy[0] + xy[1]) else math.inf
+    if not distance_m <= MAX_POINT_DISTANCE_M:
+        raise InvalidParameterError(
+            input_name,
+            f"({lon:.6f}, {lat:.6f}) is {distance_m / 1000:,.1f} km from the field; "
+            "it must be within 5 km",
+        )
+    return xy
+
+
+def _number(input_name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidParameterError(input_name, f"must be a number, got {value!r}")
+    result = float(value)
+    if not math.isfinite(result):
+        raise InvalidParameterError(input_name, f"must be a finite number, got {value!r}")
+    return result

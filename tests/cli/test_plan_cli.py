@@ -1,0 +1,95 @@
+"""``tillpath plan`` run as a user runs it: a real process, real files."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import gpxpy
+import pytest
+
+from tests.conftest import PAPER_FIELD
+
+TILLPATH = [sys.executable, "-c", "from app.cli import main; main()"]
+
+
+def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*TILLPATH, *args], capture_output=True, text=True, cwd=cwd, timeout=120)
+
+
+def test_plan_paper_field_as_gpx(tmp_path: Path) -> None:
+    out = tmp_path / "plan.gpx"
+    result = run("plan", str(PAPER_FIELD), "--format", "gpx", "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+    assert "4 lines" in result.stderr and "10 waypoints" in result.stderr
+    route = gpxpy.parse(out.read_text()).routes[0]
+    assert [p.type for p in route.points] == ["start"] + ["line_start", "line_end"] * 4 + ["finish"]
+    field = json.loads(PAPER_FIELD.read_text())
+    start, finish = (f["geometry"]["coordinates"] for f in field["features"][1:])
+    assert [route.points[0].longitude, route.points[0].latitude] == start
+    assert [route.points[-1].longitude, route.points[-1].latitude] == finish
+
+
+@pytest.mark.parametrize("fmt", ["geojson", "csv", "json"])
+def test_plan_to_stdout_in_each_format(fmt: str) -> None:
+    result = run("plan", str(PAPER_FIELD), "--format", fmt, "--interval", "2", "--headland", "1")
+    assert result.returncode == 0, result.stderr
+    if fmt == "csv":
+        rows = list(csv.DictReader(io.StringIO(result.stdout)))
+        assert rows[0]["role"] == "start" and rows[-1]["role"] == "finish"
+    else:
+        data = json.loads(result.stdout)
+        assert data["features" if fmt == "geojson" else "waypoints"]
+
+
+def test_flags_override_the_file(tmp_path: Path) -> None:
+    result = run(
+        "plan", str(PAPER_FIELD), "--format", "json", "--angle", "90",
+        "--start", "115.2981,-8.6266", "--objective", "fewest_lines",
+    )
+    assert result.returncode == 0, result.stderr
+    first = json.loads(result.stdout)["waypoints"][0]
+    assert (first["lon"], first["lat"], first["role"]) == (115.2981, -8.6266, "start")
+    assert "heading 90.0°" in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--interval", "0"], "error: interval_m: must be between 0.2 and 50 m, got 0"),
+        (["--interval", "abc"], "error: Invalid value for '--interval'"),
+        (["--start", "115.3"], "error: --start: expected LON,LAT"),
+        (["--start", "116.3,-8.6"], "error: start: "),
+        (["--angle", "200"], "error: angle_deg: must be at least 0 and less than 180"),
+        (["--format", "kml"], "error: Invalid value for '--format'"),
+        (["--headland", "9"], "error: headland_passes: must be from 0 to 5"),
+    ],
+)
+def test_bad_flags_exit_2_with_a_clear_error(args: list[str], message: str) -> None:
+    result = run("plan", str(PAPER_FIELD), *args)
+    assert result.returncode == 2
+    assert result.stderr.startswith(message), result.stderr
+    assert result.stdout == ""
+
+
+def test_bad_files_exit_2(tmp_path: Path) -> None:
+    missing = run("plan", str(tmp_path / "nope.geojson"))
+    assert missing.returncode == 2 and missing.stderr.startswith("error: FIELD: cannot read")
+    broken = tmp_path / "broken.geojson"
+    broken.write_text('{"type": "Polygon", ')
+    result = run("plan", str(broken))
+    assert result.returncode == 2 and "error: FIELD: " in result.stderr and "not valid JSON" in result.stderr
+    no_interval = tmp_path / "bare.geojson"
+    field = json.loads(PAPER_FIELD.read_text())["features"][0]["geometry"]
+    no_interval.write_text(json.dumps(field))
+    result = run("plan", str(no_interval))
+    assert result.returncode == 2 and result.stderr.startswith("error: interval_m: give --interval")
+    point = tmp_path / "point.geojson"
+    point.write_text('{"type": "Point", "coordinates": [115, -8]}')
+    result = run("plan", str(point), "--interval", "4")
+    assert result.returncode == 2 and result.stderr.startswith("error: field: must be a Polygon")

@@ -1,0 +1,83 @@
+"""Shared shapes and helpers for all tests.
+
+Fields are built in a local metric frame and converted to WGS84, so that their size in metres
+is exact wherever on Earth they are put.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import shapely
+from shapely import Polygon
+
+from planner.projection import local_frame
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared"
+FIELDS_DIR = SHARED / "fields"
+GPX_XSD = SHARED / "schemas" / "gpx-1.1.xsd"
+PAPER_FIELD = ROOT / "tests" / "data" / "paper_ketewel.geojson"
+
+#: Bali, near the paper's trial field.
+BALI = (115.298, -8.6265)
+
+
+def field_from_local(
+    exterior_m: list[tuple[float, float]],
+    holes_m: list[list[tuple[float, float]]] | None = None,
+    *,
+    at: tuple[float, float] = BALI,
+) -> Polygon:
+    """A WGS84 polygon whose local shape (metres, x east, y north) is given, centred ``at``."""
+    frame = local_frame(*at)
+    return frame.to_lonlat(Polygon(exterior_m, holes_m or []))
+
+
+def load_geojson(path: Path) -> Any:
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+@pytest.fixture
+def paper_geojson() -> Any:
+    return load_geojson(PAPER_FIELD)
+
+
+@pytest.fixture
+def square_field() -> Polygon:
+    """A 40 m × 40 m square."""
+    return field_from_local([(-20, -20), (20, -20), (20, 20), (-20, 20)])
+
+
+@pytest.fixture
+def l_field() -> Polygon:
+    """An L-shaped field, 60 m × 60 m with a 30 m × 30 m corner missing (not convex)."""
+    return field_from_local([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
+
+
+@pytest.fixture
+def field_with_hole() -> Polygon:
+    """A 50 m × 40 m field with a 10 m × 8 m hut in it."""
+    return field_from_local(
+        [(0, 0), (50, 0), (50, 40), (0, 40)], [[(20, 15), (30, 15), (30, 23), (20, 23)]]
+    )
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20221121)
+
+
+def local_geometry(plan_field: Polygon, geometry: Any) -> Any:
+    """``geometry`` (WGS84) in the planner's frame for ``plan_field``."""
+    from planner.projection import field_frame
+
+    return field_frame(plan_field).to_local(geometry)
+
+
+def convex_polygon(points_m: np.ndarray) -> Polygon:
+    return shapely.orient_polygons(shapely.MultiPoint(points_m).convex_hull)

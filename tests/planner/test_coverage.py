@@ -1,0 +1,46 @@
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from planner.coverage import cell_area, convex_chains, covered_area
+from planner.lines import scan_cell, to_sweep
+from tests.conftest import convex_polygon
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 12),
+    stretch=st.floats(0.05, 1.0),
+    heading=st.floats(0, 179.999),
+    interval=st.floats(0.3, 30.0),
+)
+def test_covered_area_equals_shapely_union_of_footprints(
+    seed: int, n: int, stretch: float, heading: float, interval: float
+) -> None:
+    points = np.random.default_rng(seed).uniform(-50, 50, (n, 2)) * [1.0, stretch]
+    hull = convex_polygon(points)
+    if hull.geom_type != "Polygon" or hull.area < 1.0:
+        return
+    ring = np.asarray(hull.exterior.coords)[:-1]
+    scan = scan_cell(ring, np.array([heading]), interval)
+    u_ring, v_ring = to_sweep(ring[:, 0], ring[:, 1], heading)
+    chains = convex_chains(u_ring, v_ring)
+    ours = covered_area(chains, scan.u, scan.v_lo, scan.v_hi, interval)
+    cell = shapely.Polygon(np.stack([u_ring, v_ring], axis=1))
+    footprints = shapely.box(scan.u - interval / 2, scan.v_lo, scan.u + interval / 2, scan.v_hi)
+    reference = shapely.intersection(cell, shapely.union_all(footprints)).area
+    assert ours == pytest.approx(reference, rel=1e-9, abs=1e-9)
+    assert cell_area(chains) == pytest.approx(cell.area, rel=1e-9)
+
+
+def test_a_slanted_end_leaves_a_triangle_untilled() -> None:
+    # A right trapezoid: lines at heading 0 end on the slanted top edge.
+    u_ring = np.array([0.0, 4.0, 4.0, 0.0])
+    v_ring = np.array([0.0, 0.0, 12.0, 10.0])
+    chains = convex_chains(u_ring, v_ring)
+    covered = covered_area(chains, np.array([2.0]), np.array([0.0]), np.array([11.0]), 4.0)
+    # The footprint misses the triangle above v = 11 on the right, 2 m × 1 m / 2.
+    assert covered == pytest.approx(cell_area(chains) - 1.0)

@@ -1,0 +1,229 @@
+"""The whole planner on the paper's field and on random convex fields (R1–R5, R7)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from shapely import Polygon
+
+from planner import parse_field_geojson, plan_coverage
+from planner.ordering import ordered_line_ends
+from planner.projection import field_frame, local_frame
+from planner.types import CoveragePlan
+from tests.conftest import field_from_local
+from tests.planner.plan_checks import (
+    assert_figures_add_up,
+    assert_inside,
+    assert_spacing_and_edges,
+    line_offsets,
+    local_segments,
+    reference_coverage,
+)
+
+
+def test_paper_field_gives_four_lines_and_eight_line_waypoints(paper_geojson: dict) -> None:
+    spec = parse_field_geojson(paper_geojson)
+    plan = plan_coverage(
+        spec.field_lonlat,
+        interval_m=spec.interval_m,
+        start_lonlat=spec.start_lonlat,
+        finish_lonlat=spec.finish_lonlat,
+    )
+    roles = [w.role for w in plan.waypoints]
+    assert roles == ["start"] + ["line_start", "line_end"] * 4 + ["finish"]
+    assert plan.stats.line_count == 4
+    assert (plan.waypoints[0].lon, plan.waypoints[0].lat) == spec.start_lonlat
+    assert (plan.waypoints[-1].lon, plan.waypoints[-1].lat) == spec.finish_lonlat
+    assert plan.stats.area_m2 == pytest.approx(302.65, abs=0.01)
+    assert_inside(plan)
+    assert_spacing_and_edges(plan)
+    assert_figures_add_up(plan)
+
+
+@st.composite
+def convex_fields(draw: st.DrawFn) -> tuple[Polygon, float, tuple | None, tuple | None]:
+    """A random convex field of 10 m² to 500 ha somewhere on Earth, an interval, start, finish."""
+    lon = draw(st.floats(-179.0, 179.0))
+    lat = draw(st.floats(-70.0, 70.0))
+    area_target = 10 ** draw(st.floats(1.0, math.log10(5e6)))
+    n = draw(st.integers(3, 16))
+    seed = draw(st.integers(0, 2**32 - 1))
+    aspect = draw(st.floats(0.1, 1.0))
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-1, 1, (n, 2)) * [1.0, aspect]
+    hull = shapely.MultiPoint(points).convex_hull
+    if hull.geom_type != "Polygon" or hull.area < 1e-3:
+        hull = shapely.box(-1, -aspect, 1, aspect)
+    hull = shapely.affinity.scale(hull, *(2 * [math.sqrt(area_target / hull.area)]))
+    hull = shapely.affinity.rotate(hull, draw(st.floats(0, 360)))
+    field = field_from_local(list(hull.exterior.coords), at=(lon, lat))
+    side = math.sqrt(area_target)
+    interval = draw(st.floats(max(0.2, side / 400), min(50.0, max(0.2, side / 2))))
+    frame = local_frame(lon, lat)
+    reach = side + 200
+
+    def point() -> tuple[float, float] | None:
+        if not draw(st.booleans()):
+            return None
+        x, y = draw(st.floats(-reach, reach)), draw(st.floats(-reach, reach))
+        plon, plat = frame.to_lonlat_xy(x, y)
+        return float(plon), float(plat)
+
+    return field, interval, point(), point()
+
+
+SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+@SETTINGS
+@given(job=convex_fields())
+def test_random_convex_fields_satisfy_r1_r2_r3_r4(job: tuple) -> None:
+    field, interval, start, finish = job
+    plan = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    assert_inside(plan)
+    assert_spacing_and_edges(plan)
+    assert_figures_add_up(plan)
+    assert plan.stats.coverage_ratio == pytest.approx(reference_coverage(plan), abs=2e-4)
+    roles = [w.role for w in plan.waypoints]
+    assert (roles[0] == "start") == (start is not None)
+    assert (roles[-1] == "finish") == (finish is not None)
+
+
+@SETTINGS
+@given(job=convex_fields())
+def test_same_request_same_plan(job: tuple) -> None:
+    field, interval, start, finish = job
+    first = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    again = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    assert first.waypoints == again.waypoints
+    assert first.segments == again.segments
+    assert first.stats.as_dict() | {"planning_ms": 0} == again.stats.as_dict() | {"planning_ms": 0}
+
+
+def variant_path_lengths(
+    plan: CoveragePlan, start: tuple | None, finish: tuple | None
+) -> list[float]:
+    """Rebuild the four ways to drive the plan's own lines and measure each whole path."""
+    frame = field_frame(plan.field_lonlat)
+    theta = math.radians(plan.stats.angle_deg)
+    lines = sorted(
+        (np.asarray(line.coords) for line in local_segments(plan, "line")),
+        key=lambda c: c[0, 0] * math.cos(theta) - c[0, 1] * math.sin(theta),
+    )
+    along = lambda p: p[0] * math.sin(theta) + p[1] * math.cos(theta)  # noqa: E731
+    lows = [min(c, key=along) for c in lines]
+    highs = [max(c, key=along) for c in lines]
+    u = np.arange(len(lines), dtype=float)
+    v_lo = np.array([along(p) for p in lows])
+    v_hi = np.array([along(p) for p in highs])
+    ends = {}
+    for k in range(len(lines)):
+        ends[(k, float(v_lo[k]))] = lows[k]
+        ends[(k, float(v_hi[k]))] = highs[k]
+    lengths = []
+    for variant in range(4):
+        _, v_from, v_to, index = ordered_line_ends(u, v_lo, v_hi, variant)
+        points = []
+        for k, a, b in zip(index, v_from, v_to, strict=True):
+            points += [ends[(int(k), float(a))], ends[(int(k), float(b))]]
+        if start is not None:
+            points.insert(0, np.array(frame.to_local_xy(*start)))
+        if finish is not None:
+            points.append(np.array(frame.to_local_xy(*finish)))
+        lengths.append(float(np.sum(np.hypot(*np.diff(np.array(points), axis=0).T))))
+    return lengths
+
+
+@SETTINGS
+@given(job=convex_fields(), angle=st.floats(0.0, 179.99))
+def test_chosen_order_is_never_longer_than_any_of_the_four_variants(
+    job: tuple, angle: float
+) -> None:
+    field, interval, start, finish = job
+    plan = plan_coverage(
+        field, interval_m=interval, start_lonlat=start, finish_lonlat=finish, angle_deg=angle
+    )
+    assert plan.stats.angle_deg == pytest.approx(angle, abs=1e-6)
+    # The plan's start and finish are its given points rounded to 1e-9° (0.1 mm).
+    start = (plan.waypoints[0].lon, plan.waypoints[0].lat) if start else None
+    finish = (plan.waypoints[-1].lon, plan.waypoints[-1].lat) if finish else None
+    variants = variant_path_lengths(plan, start, finish)
+    # Measure the chosen route from the same rounded waypoints as the variants.
+    frame = field_frame(field)
+    x, y = frame.to_local_xy([w.lon for w in plan.waypoints], [w.lat for w in plan.waypoints])
+    chosen = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    assert chosen == pytest.approx(plan.stats.path_length_m, abs=1e-3 + 2e-4 * len(x))
+    assert chosen <= min(variants) + 1e-6
+
+
+@SETTINGS
+@given(job=convex_fields(), angles=st.lists(st.integers(0, 179), min_size=1, max_size=3))
+def test_angle_search_beats_every_candidate_angle(job: tuple, angles: list[int]) -> None:
+    """R5: no edge direction and no whole degree (the 1° sweep) gives a shorter path."""
+    field, interval, start, finish = job
+    best = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    fewest = plan_coverage(
+        field,
+        interval_m=interval,
+        start_lonlat=start,
+        finish_lonlat=finish,
+        objective="fewest_lines",
+    )
+    # Every edge direction is a candidate, so the minimum-width direction is among them.
+    frame = field_frame(field)
+    ring = np.asarray(frame.to_local(field).exterior.coords)
+    edges = np.degrees(np.arctan2(*np.diff(ring, axis=0).T)) % 180.0
+    for angle in [*angles, *edges.tolist()]:
+        fixed = plan_coverage(
+            field,
+            interval_m=interval,
+            start_lonlat=start,
+            finish_lonlat=finish,
+            angle_deg=angle % 180.0,
+        )
+        assert best.stats.path_length_m <= fixed.stats.path_length_m + 1e-3
+        assert fewest.stats.line_count <= fixed.stats.line_count
+
+
+def test_fixed_angle_lines_run_at_that_heading(square_field: Polygon) -> None:
+    plan = plan_coverage(square_field, interval_m=4.0, angle_deg=30.0)
+    assert plan.stats.angle_deg == 30.0
+    theta = math.radians(30.0)
+    for line in local_segments(plan, "line"):
+        (x0, y0), (x1, y1) = line.coords
+        # Sideways offset of the far end from the 30° ray through the near end: ≤ 1 mm
+        # (waypoints are rounded to 1e-9°, 0.1 mm).
+        sideways = (x1 - x0) * math.cos(theta) - (y1 - y0) * math.sin(theta)
+        assert abs(sideways) < 1e-3
+        assert line.length > 0
+
+
+def test_square_field_lines_touch_both_sides(square_field: Polygon) -> None:
+    plan = plan_coverage(square_field, interval_m=4.0, angle_deg=0.0)
+    offsets, low, high = line_offsets(plan)
+    assert len(offsets) == 10
+    assert np.allclose(np.diff(offsets), 4.0, atol=1e-3)
+    assert plan.stats.coverage_ratio == pytest.approx(1.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("passes", [1, 2, 3])
+def test_headland_passes_stay_inside_and_close_the_slanted_ends(passes: int) -> None:
+    trapezoid = field_from_local([(0, 0), (80, 0), (70, 50), (5, 60)])
+    without = plan_coverage(trapezoid, interval_m=3.0, angle_deg=0.0)
+    plan = plan_coverage(trapezoid, interval_m=3.0, angle_deg=0.0, headland_passes=passes)
+    assert_inside(plan)
+    assert len(local_segments(plan, "headland")) == passes
+    assert plan.stats.coverage_ratio == pytest.approx(reference_coverage(plan), abs=1e-4)
+    assert plan.stats.coverage_ratio > without.stats.coverage_ratio
+    roles = [w.role for w in plan.waypoints]
+    assert roles.index("headland") > max(i for i, r in enumerate(roles) if r == "line_end")
+
+
+def test_non_convex_field_is_refused_for_now(l_field: Polygon) -> None:
+    with pytest.raises(ValueError, match="^field: field is not convex"):
+        plan_coverage(l_field, interval_m=4.0)
