@@ -6,7 +6,6 @@ import numpy as np
 import numpy.typing as npt
 
 from planner.errors import PlanTooLargeError
-from planner.lines import line_counts, to_sweep
 from planner.ordering import VariantLengths
 from planner.types import Objective
 
@@ -53,35 +52,23 @@ def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> F
     return np.unique(headings)
 
 
-def affordable_headings(
-    ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float
-) -> FloatArray:
-    """Drop headings that would need more than :data:`MAX_LINES` lines.
-
-    Raises
-    ------
-    PlanTooLargeError
-        If every heading needs more than :data:`MAX_LINES` lines.
-    """
-    u, _ = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings_deg[:, None])
-    counts = line_counts(u.max(axis=1) - u.min(axis=1), interval_m)
-    keep = counts <= MAX_LINES
-    if not keep.any():
-        raise PlanTooLargeError(
-            "interval_m",
-            f"at {interval_m:g} m the field needs at least {int(counts.min()):,} tillage lines; "
-            f"tillpath plans at most {MAX_LINES:,} — choose a wider interval or a smaller field",
-        )
-    return headings_deg[keep]
-
-
 def select_plan(
-    lengths: VariantLengths, line_counts_per_heading: IntArray, objective: Objective
+    lengths: VariantLengths,
+    line_counts_per_heading: IntArray,
+    objective: Objective,
+    *,
+    interval_m: float | None = None,
 ) -> tuple[int, int]:
     """Pick the (heading index, variant index) the objective prefers.
 
     ``shortest_path`` minimises the whole path; ``fewest_lines`` minimises the line count,
     then the path. Ties go to the first heading and variant, so the choice is deterministic.
+    Headings that need more than :data:`MAX_LINES` lines are never chosen.
+
+    Raises
+    ------
+    PlanTooLargeError
+        If every heading needs more than :data:`MAX_LINES` lines.
 
     Examples
     --------
@@ -93,7 +80,16 @@ def select_plan(
     >>> select_plan(lengths, np.array([3, 4]), "fewest_lines")
     (0, 0)
     """
+    counts = line_counts_per_heading
+    if counts.min() > MAX_LINES:
+        at = f"at {interval_m:g} m " if interval_m else ""
+        raise PlanTooLargeError(
+            "interval_m",
+            f"{at}the field needs at least {int(counts.min()):,} tillage lines; tillpath "
+            f"plans at most {MAX_LINES:,}: choose a wider interval or a smaller field",
+        )
     total = np.round(lengths.total / _TIE_M) * _TIE_M
+    total = np.where((counts <= MAX_LINES)[:, None], total, np.inf)
     if objective == "fewest_lines":
         fewest = line_counts_per_heading == line_counts_per_heading.min()
         total = np.where(fewest[:, None], total, np.inf)

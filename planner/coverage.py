@@ -109,19 +109,23 @@ def covered_area(
     n = len(u)
     if n == 0:
         return 0.0
-    # Strips tile the sweep except the last two, which overlap when the last line sits
-    # nearer its neighbour (R2): add both, subtract their common part once.
-    first = _covered(chains, u[: n - 1] - half, u[: n - 1] + half, v_lo[: n - 1], v_hi[: n - 1])
-    last = _covered(chains, u[n - 1 :] - half, u[n - 1 :] + half, v_lo[n - 1 :], v_hi[n - 1 :])
-    overlap = 0.0
-    if n >= 2 and u[n - 1] - u[n - 2] < d:
-        overlap = _covered(
-            chains,
-            u[n - 1 :] - half,
-            u[n - 2 : n - 1] + half,
-            np.maximum(v_lo[n - 2 : n - 1], v_lo[n - 1 :]),
-            np.minimum(v_hi[n - 2 : n - 1], v_hi[n - 1 :]),
-        )
+    s0, s1 = u - half, u + half
+    if n == 1 or u[n - 1] - u[n - 2] >= d:
+        return _covered(chains, s0, s1, v_lo, v_hi)
+    # The last line sits nearer its neighbour (R2), so their strips overlap on
+    # [s0[n-1], s1[n-2]]. Where their intervals overlap too (the usual case) the union there
+    # is one interval, and all strips become disjoint: one pass. Otherwise add both and
+    # subtract the common part.
+    a2, b2 = v_lo[n - 2 :], v_hi[n - 2 :]
+    if max(a2) <= min(b2):
+        cut0 = np.concatenate([s0[: n - 1], s0[n - 1 :], s1[n - 2 : n - 1]])
+        cut1 = np.concatenate([s1[: n - 2], s0[n - 1 :], s1[n - 2 : n - 1], s1[n - 1 :]])
+        low = np.concatenate([v_lo[: n - 1], [min(a2)], v_lo[n - 1 :]])
+        high = np.concatenate([v_hi[: n - 1], [max(b2)], v_hi[n - 1 :]])
+        return _covered(chains, cut0, cut1, low, high)
+    first = _covered(chains, s0[: n - 1], s1[: n - 1], v_lo[: n - 1], v_hi[: n - 1])
+    last = _covered(chains, s0[n - 1 :], s1[n - 1 :], v_lo[n - 1 :], v_hi[n - 1 :])
+    overlap = _covered(chains, s0[n - 1 :], s1[n - 2 : n - 1], [max(a2)], [min(b2)])
     return first + last - overlap
 
 
@@ -133,11 +137,15 @@ def cell_area(chains: Chains) -> float:
 
 
 def _covered(
-    chains: Chains, s0: FloatArray, s1: FloatArray, a: FloatArray, b: FloatArray
+    chains: Chains,
+    s0: npt.ArrayLike,
+    s1: npt.ArrayLike,
+    a: npt.ArrayLike,
+    b: npt.ArrayLike,
 ) -> float:
     """Σ_k ∫_{s0_k}^{s1_k} max(0, min(hi, b_k) − max(lo, a_k)) du, for disjoint sorted strips."""
-    if len(s0) == 0:
-        return 0.0
+    s0, s1 = np.asarray(s0, dtype=float), np.asarray(s1, dtype=float)
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     u_min, u_max = chains.u_min, chains.u_max
     cuts = np.concatenate([chains.lo_u, chains.hi_u, s0, s1])
     cuts = np.unique(np.clip(cuts, u_min, u_max))

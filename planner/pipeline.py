@@ -18,7 +18,7 @@ from planner import angles, validation
 from planner.coverage import cell_area, convex_chains, covered_area
 from planner.headlands import headland_rings, inner_field
 from planner.lines import from_sweep, scan_cell, to_sweep
-from planner.ordering import ordered_line_ends, variant_lengths
+from planner.ordering import ordered_line_ends, score_headings
 from planner.projection import LocalFrame, field_frame, geodesic_area_m2
 from planner.turns import pivot_time_s
 from planner.types import (
@@ -112,16 +112,13 @@ def plan_coverage(
     ring_xy = np.asarray(shapely.orient_polygons(cell).exterior.coords)[:-1]
 
     headings = angles.candidate_headings(ring_xy, fixed_heading)
-    headings = angles.affordable_headings(ring_xy, headings, interval)
-    scan = scan_cell(ring_xy, headings, interval)
     # Lines end at the cell; with headland passes the route goes on from the last line.
-    after_lines = _ring_entry(rings[-1], None) if rings else None
-    lengths = variant_lengths(scan, start_xy, after_lines if rings else finish_xy)
-    best, variant = angles.select_plan(lengths, scan.counts, goal)
+    after_lines = _ring_entry(rings[-1], None) if rings else finish_xy
+    lengths, counts = score_headings(ring_xy, headings, interval, start_xy, after_lines)
+    best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
     heading = float(headings[best])
-
-    lines = slice(scan.offsets[best], scan.offsets[best + 1])
-    u, v_lo, v_hi = scan.u[lines], scan.v_lo[lines], scan.v_hi[lines]
+    scan = scan_cell(ring_xy, headings[best : best + 1], interval)
+    u, v_lo, v_hi = scan.u, scan.v_lo, scan.v_hi
     route = _Route()
     if start_xy is not None:
         route.add("start", None, [start_xy])
@@ -250,13 +247,20 @@ def _assemble(
         for seq in range(len(x))
     )
     step = np.hypot(np.diff(x), np.diff(y))
-    lengths = {"line": 0.0, "turn": 0.0, "transit": 0.0, "headland": 0.0}
-    segments = []
-    for kind, index, first, last in route.segments:
-        lengths[kind] += float(step[first:last].sum())
-        coords = tuple(zip(lon_list[first : last + 1], lat_list[first : last + 1], strict=True))
-        segments.append(PathSegment(kind, index, coords))
-    path_length = float(step.sum())
+    distance = np.concatenate(([0.0], np.cumsum(step)))
+    kinds = [kind for kind, _, _, _ in route.segments]
+    bounds = np.array([(first, last) for _, _, first, last in route.segments], dtype=np.int64)
+    seg_length = distance[bounds[:, 1]] - distance[bounds[:, 0]] if len(bounds) else np.zeros(0)
+    lengths = {
+        kind: float(seg_length[[k == kind for k in kinds]].sum())
+        for kind in ("line", "turn", "transit", "headland")
+    }
+    points = list(zip(lon_list, lat_list, strict=True))
+    segments = [
+        PathSegment(kind, index, tuple(points[first : last + 1]))
+        for kind, index, first, last in route.segments
+    ]
+    path_length = float(distance[-1])
     estimated_time = path_length / speed_mps + pivot_time_s(
         x, y, speed_mps=speed_mps, track_width_m=track_width_m
     )

@@ -70,11 +70,13 @@ def validate_field(field_lonlat: Any) -> Polygon:
         raise InvalidFieldError(
             "field", "latitude is outside the 80°S to 84°N range that tillpath plans in"
         )
-    exterior = np.asarray(field_lonlat.exterior.coords)[:-1]
-    if len(np.unique(exterior, axis=0)) < 3:
-        raise InvalidFieldError("field", "polygon needs at least 3 distinct vertices")
     reason = shapely.is_valid_reason(field_lonlat)
     if reason != "Valid Geometry":
+        # A valid polygon has three distinct vertices and an area, so count only here.
+        if len(set(field_lonlat.exterior.coords)) < 3:
+            raise InvalidFieldError("field", "polygon needs at least 3 distinct vertices")
+        if field_lonlat.area == 0.0:
+            raise InvalidFieldError("field", "polygon has no area: its vertices lie on one line")
         raise InvalidFieldError("field", _describe_invalid(reason))
     area_m2 = geodesic_area_m2(field_lonlat)
     if area_m2 <= MIN_AREA_M2:

@@ -158,7 +158,8 @@ def test_chosen_order_is_never_longer_than_any_of_the_four_variants(
     x, y = frame.to_local_xy([w.lon for w in plan.waypoints], [w.lat for w in plan.waypoints])
     chosen = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
     assert chosen == pytest.approx(plan.stats.path_length_m, abs=1e-3 + 2e-4 * len(x))
-    assert chosen <= min(variants) + 1e-6
+    # Each waypoint is rounded to 0.1 mm, so lengths measured from them carry that noise.
+    assert chosen <= min(variants) + 1e-4 * len(x)
 
 
 @SETTINGS

@@ -28,6 +28,13 @@ def test_fewer_than_three_distinct_vertices(square_field: Polygon) -> None:
         plan(flat)
 
 
+def test_collinear_vertices_have_no_area() -> None:
+    lon, lat = BALI
+    line = Polygon([(lon, lat), (lon + 0.001, lat), (lon + 0.002, lat)])
+    with pytest.raises(InvalidFieldError, match="^field: polygon has no area"):
+        plan(line)
+
+
 def test_self_intersection_says_where() -> None:
     bowtie = field_from_local([(0, 0), (40, 40), (40, 0), (0, 40)])
     with pytest.raises(InvalidFieldError) as caught:

@@ -1,0 +1,39 @@
+"""Timing helpers shared by the benchmarks."""
+
+from __future__ import annotations
+
+import gc
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any
+
+
+def time_calls(function: Callable[[], Any], *, repeat: int, warmup: int = 5) -> list[float]:
+    """Wall-clock seconds of ``repeat`` calls, after ``warmup`` untimed ones (GC paused)."""
+    for _ in range(warmup):
+        function()
+    timings = []
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for _ in range(repeat):
+            started = time.perf_counter()
+            function()
+            timings.append(time.perf_counter() - started)
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+    return timings
+
+
+def summary_ms(timings: list[float]) -> tuple[float, float, float]:
+    """Median, 10th and 90th percentile [ms]."""
+    ordered = sorted(timings)
+    pick = lambda q: ordered[min(len(ordered) - 1, int(q * len(ordered)))] * 1000  # noqa: E731
+    return statistics.median(ordered) * 1000, pick(0.1), pick(0.9)
+
+
+def verdict(value: float, budget: float, *, lower_is_better: bool = True) -> str:
+    ok = value <= budget if lower_is_better else value >= budget
+    return "met" if ok else "**missed**"
