@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from shapely.geometry import mapping
+from shapely import Polygon
 
 from planner.errors import InvalidFieldError
 from planner.fields import parse_field_geojson
@@ -32,31 +32,28 @@ def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str,
     name : str, optional
         Stored in the collection's properties.
     """
-    features: list[dict[str, Any]] = [_feature(mapping(plan.field_lonlat), kind="field")]
+    features: list[dict[str, Any]] = [_feature(_polygon(plan.field_lonlat), {"kind": "field"})]
     for index, cell in enumerate(plan.cells_lonlat):
-        features.append(_feature(mapping(cell), kind="cell", index=index))
+        features.append(_feature(_polygon(cell), {"kind": "cell", "index": index}))
     for segment in plan.segments:
-        geometry = {"type": "LineString", "coordinates": [list(p) for p in segment.lonlat]}
+        line = {"type": "LineString", "coordinates": [list(p) for p in segment.lonlat]}
+        properties: dict[str, Any] = {"kind": segment.kind}
         if segment.kind in ("line", "headland"):
-            features.append(_feature(geometry, kind=segment.kind, index=segment.index))
-        else:
-            features.append(_feature(geometry, kind=segment.kind))
+            properties["index"] = segment.index
+        features.append(_feature(line, properties))
     if len(plan.waypoints) >= 2:
         path = [[w.lon, w.lat] for w in plan.waypoints]
-        features.append(_feature({"type": "LineString", "coordinates": path}, kind="path"))
-    for w in plan.waypoints:
-        features.append(
-            _feature(
-                {"type": "Point", "coordinates": [w.lon, w.lat]},
-                kind="waypoint",
-                seq=w.seq,
-                role=w.role,
-                line=w.line,
-            )
+        features.append(_feature({"type": "LineString", "coordinates": path}, {"kind": "path"}))
+    features.extend(
+        _feature(
+            {"type": "Point", "coordinates": [w.lon, w.lat]},
+            {"kind": "waypoint", "seq": w.seq, "role": w.role, "line": w.line},
         )
+        for w in plan.waypoints
+    )
     stats = plan.stats.as_dict()
     del stats["planning_ms"]
-    properties: dict[str, Any] = {"name": name, "interval_m": plan.interval_m, **stats}
+    properties = {"name": name, "interval_m": plan.interval_m, **stats}
     return {"type": "FeatureCollection", "properties": properties, "features": features}
 
 
@@ -111,18 +108,10 @@ def plan_from_geojson(obj: Any) -> CoveragePlan:
     )
 
 
-def _feature(geometry: Mapping[str, Any], **properties: Any) -> dict[str, Any]:
-    return {"type": "Feature", "properties": properties, "geometry": _lists(geometry)}
+def _feature(geometry: dict[str, Any], properties: dict[str, Any]) -> dict[str, Any]:
+    return {"type": "Feature", "properties": properties, "geometry": geometry}
 
 
-def _lists(geometry: Mapping[str, Any]) -> dict[str, Any]:
-    """shapely's mapping() gives tuples; JSON wants lists (and tests compare equal)."""
-    return {"type": geometry["type"], "coordinates": _to_lists(geometry["coordinates"])}
-
-
-def _to_lists(value: Any) -> Any:
-    if isinstance(value, (list, tuple)):
-        if value and isinstance(value[0], (int, float)):
-            return list(value)
-        return [_to_lists(v) for v in value]
-    return value
+def _polygon(polygon: Polygon) -> dict[str, Any]:
+    rings = [polygon.exterior, *polygon.interiors]
+    return {"type": "Polygon", "coordinates": [[list(c) for c in r.coords] for r in rings]}
