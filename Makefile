@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test bench install lint typecheck clean
+.PHONY: run test bench install lint typecheck clean screenshot
 
 # Python environment, rebuilt when the declared dependencies change.
 $(BIN)/.installed: pyproject.toml
@@ -28,7 +28,9 @@ test: install
 	scripts/ensure-chromium
 	$(BIN)/python -m pytest
 
+# The API benchmark loads the server with wrk (Debian), a real HTTP load generator.
 bench: install
+	command -v wrk >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -qq wrk; }
 	$(BIN)/python -m bench.run
 
 lint: install
@@ -40,3 +42,6 @@ typecheck: install
 
 clean:
 	rm -rf $(VENV) node_modules .pytest_cache .hypothesis .mypy_cache
+
+screenshot: install
+	$(BIN)/python scripts/screenshot.py

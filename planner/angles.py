@@ -14,6 +14,9 @@ IntArray = npt.NDArray[np.int64]
 
 #: Step of the fine sweep of headings [deg], on top of every edge direction.
 SWEEP_STEP_DEG = 1.0
+#: At most this many edge directions are tried, the longest edges' first: a boundary traced
+#: from GPS has many short edges whose directions are noise.
+MAX_EDGE_HEADINGS = 180
 #: A plan with more tillage lines than this is refused (product.md §3).
 MAX_LINES = 20_000
 #: Path lengths closer than this count as equal, so ties break the same way every time [m].
@@ -22,6 +25,9 @@ _TIE_M = 1e-6
 
 def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> FloatArray:
     """Headings to try: every edge direction of the ring plus a 1° sweep, in [0, 180).
+
+    A ring of more than :data:`MAX_EDGE_HEADINGS` edges contributes its longest edges'
+    directions only.
 
     Parameters
     ----------
@@ -46,7 +52,10 @@ def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> F
         return np.array([float(fixed_deg)])
     dx = np.roll(ring_xy[:, 0], -1) - ring_xy[:, 0]
     dy = np.roll(ring_xy[:, 1], -1) - ring_xy[:, 1]
-    edges = np.degrees(np.arctan2(dx, dy))[np.hypot(dx, dy) > 0] % 180.0
+    length = np.hypot(dx, dy)
+    longest = np.argsort(-length, kind="stable")[:MAX_EDGE_HEADINGS]
+    longest = longest[length[longest] > 0]
+    edges = np.degrees(np.arctan2(dx[longest], dy[longest])) % 180.0
     sweep = np.arange(0.0, 180.0, SWEEP_STEP_DEG)
     headings = np.concatenate([sweep, np.round(edges, 9) % 180.0])
     return np.unique(headings)

@@ -92,7 +92,7 @@ def parse_field_geojson(obj: Any) -> FieldSpec:
     if kind == "FeatureCollection":
         return _from_collection(obj)
     if kind == "Feature":
-        props = obj.get("properties") or {}
+        props = _properties(obj)
         return FieldSpec(
             field_lonlat=_polygon_from_geometry(obj.get("geometry")),
             interval_m=_interval_property(props),
@@ -111,7 +111,7 @@ def _from_collection(obj: Mapping[str, Any]) -> FieldSpec:
         if not isinstance(feature, Mapping):
             raise InvalidFieldError("field", "every feature must be a GeoJSON Feature object")
         geometry = feature.get("geometry") or {}
-        props = feature.get("properties") or {}
+        props = _properties(feature)
         gtype = geometry.get("type") if isinstance(geometry, Mapping) else None
         if gtype in ("Polygon", "MultiPolygon"):
             polygons.append((_polygon_from_geometry(geometry), props))
@@ -174,6 +174,15 @@ def _ring(ring: Any, index: int) -> list[tuple[float, float]]:
             "field", f"{where} needs at least 3 distinct vertices and a closing point"
         )
     return points
+
+
+def _properties(feature: Mapping[str, Any]) -> Mapping[str, Any]:
+    props = feature.get("properties")
+    if props is None:
+        return {}
+    if not isinstance(props, Mapping):
+        raise InvalidFieldError("field", "a Feature's properties must be a JSON object or null")
+    return props
 
 
 def _interval_property(props: Mapping[str, Any]) -> float | None:

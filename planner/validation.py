@@ -24,6 +24,9 @@ HEADLAND_PASSES_MAX = 5
 MIN_AREA_M2 = 1.0
 MAX_AREA_M2 = 2000.0 * 10_000.0
 MAX_POINT_DISTANCE_M = 5_000.0
+#: Real field boundaries have a few hundred vertices (310 at most in shared/fields); a limit
+#: keeps a pasted GPS log or a mistaken file from costing seconds and gigabytes.
+MAX_VERTICES = 2_000
 #: A vertex within this distance of the convex hull does not make a field non-convex [m].
 CONVEXITY_TOLERANCE_M = 1e-3
 
@@ -56,6 +59,11 @@ def validate_field(field_lonlat: Any) -> Polygon:
     if field_lonlat.is_empty:
         raise InvalidFieldError("field", "polygon is empty")
     coords = shapely.get_coordinates(field_lonlat)
+    if len(coords) > MAX_VERTICES:
+        raise InvalidFieldError(
+            "field",
+            f"boundary has {len(coords):,} vertices; simplify it to at most {MAX_VERTICES:,}",
+        )
     if not np.isfinite(coords).all():
         raise InvalidFieldError("field", "a coordinate is not a finite number")
     lon, lat = coords[:, 0], coords[:, 1]

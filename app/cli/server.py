@@ -1,9 +1,69 @@
-"""Placeholder: the owner of this module replaces it."""
+"""``tillpath serve`` and ``tillpath db upgrade``: run the web app and migrate its database."""
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import typer
+
+from app.cli.common import fail
+
+
+def upgrade(url: str | None = None) -> str:
+    """Migrate the database at ``url`` (default: the settings') to the newest revision.
+
+    Returns
+    -------
+    str
+        The URL migrated, with any password hidden.
+    """
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from app.db import upgrade_database
+    from app.settings import get_settings
+
+    url = url or get_settings().database_url
+    shown = make_url(url).render_as_string(hide_password=True)
+    try:
+        upgrade_database(url)
+    except (SQLAlchemyError, OSError) as exc:
+        fail(f"database: cannot migrate {shown}: {exc}")
+    return shown
 
 
 def register(cli: typer.Typer) -> None:
-    """Add this module's commands to ``cli``."""
+    """Add ``serve`` and the ``db`` group to ``cli``."""
+    db = typer.Typer(help="Manage the database.", no_args_is_help=True)
+
+    @db.command("upgrade")
+    def db_upgrade() -> None:
+        """Apply the migrations to TILLPATH_DATABASE_URL (default: ./data/tillpath.db)."""
+        shown = upgrade()
+        typer.echo(f"database {shown} is up to date", err=True)
+
+    cli.add_typer(db, name="db")
+
+    @cli.command()
+    def serve(
+        host: Annotated[str, typer.Option(help="Address to listen on.")] = "127.0.0.1",
+        port: Annotated[int, typer.Option(min=1, max=65535, help="TCP port.")] = 8000,
+        workers: Annotated[int, typer.Option(min=1, help="Worker processes.")] = 1,
+        access_log: Annotated[
+            bool, typer.Option("--access-log/--no-access-log", help="Log every request.")
+        ] = True,
+    ) -> None:
+        """Migrate the database, then serve the map page and the API (uvicorn)."""
+        import uvicorn
+
+        shown = upgrade()
+        typer.echo(f"database {shown} is up to date; serving on http://{host}:{port}", err=True)
+        uvicorn.run(
+            "app.main:create_app",
+            factory=True,
+            host=host,
+            port=port,
+            workers=workers,
+            access_log=access_log,
+            proxy_headers=True,
+        )

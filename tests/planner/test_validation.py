@@ -159,3 +159,27 @@ def test_every_error_is_a_value_error_naming_its_input(square_field: Polygon) ->
         plan(square_field, interval_m=0)
     assert isinstance(caught.value, PlannerError)
     assert caught.value.input_name == "interval_m"
+
+
+def test_field_with_too_many_vertices_is_refused_before_any_work() -> None:
+    import numpy as np
+
+    angle = np.linspace(0, 2 * np.pi, 2_500, endpoint=False)
+    circle = field_from_local(list(zip(100 * np.cos(angle), 100 * np.sin(angle), strict=True)))
+    with pytest.raises(InvalidFieldError, match="^field: boundary has 2,501 vertices; simplify"):
+        plan(circle)
+
+
+@pytest.mark.parametrize("properties", [[], "x", 3])
+def test_feature_properties_must_be_an_object(properties: object) -> None:
+    from planner import parse_field_geojson
+
+    feature = {
+        "type": "Feature",
+        "properties": properties,
+        "geometry": {"type": "Polygon", "coordinates": [[[0, 0], [1, 0], [1, 1], [0, 0]]]},
+    }
+    with pytest.raises(InvalidFieldError, match="properties must be a JSON object"):
+        parse_field_geojson(feature)
+    with pytest.raises(InvalidFieldError, match="properties must be a JSON object"):
+        parse_field_geojson({"type": "FeatureCollection", "features": [feature]})

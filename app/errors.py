@@ -1,0 +1,277 @@
+"""Errors to HTTP answers, in one table (TiTiler's ``DEFAULT_STATUS_CODES``).
+
+Routes never catch planner errors: they propagate here, and every error answer has the same
+shape, ``{"detail": "<input>: <problem>"}`` with ``detail`` a string. FastAPI's validation
+errors (a list of dicts) are turned into one such sentence too.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any, Final
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from planner import InvalidFieldError, InvalidParameterError, PlannerError, PlanTooLargeError
+
+logger = logging.getLogger(__name__)
+
+
+class NotFoundError(LookupError):
+    """A stored object does not exist: ``plan 42 not found``.
+
+    Parameters
+    ----------
+    kind : str
+        What was looked for (``plan``, ``simulation``, ``run``).
+    ident : int
+        Its id.
+    """
+
+    def __init__(self, kind: str, ident: int) -> None:
+        super().__init__(f"{kind} {ident} not found")
+        self.kind = kind
+        self.ident = ident
+
+
+class BodyTooLargeError(ValueError):
+    """A request body over the configured limit.
+
+    Parameters
+    ----------
+    limit : int
+        The limit [bytes].
+    """
+
+    def __init__(self, limit: int) -> None:
+        super().__init__(f"body: the request is larger than the limit of {limit} bytes")
+        self.limit = limit
+
+
+#: The one table: exception class -> HTTP status. Looked up along the class's MRO, so a
+#: subclass without its own row gets its parent's status.
+STATUS_CODES: Final[dict[type[Exception], int]] = {
+    InvalidFieldError: 422,
+    InvalidParameterError: 422,
+    PlanTooLargeError: 422,
+    PlannerError: 422,
+    RequestValidationError: 422,
+    NotFoundError: 404,
+    BodyTooLargeError: 413,
+}
+
+#: What FastAPI says when the body is not JSON it can decode (bad UTF-8, nesting too deep).
+_FASTAPI_BODY_PARSE_ERROR = "There was an error parsing the body"
+
+
+def status_for(exc: BaseException) -> int:
+    """Return the HTTP status of ``exc`` from :data:`STATUS_CODES` (500 if not listed)."""
+    for cls in type(exc).__mro__:
+        if cls in STATUS_CODES:
+            return STATUS_CODES[cls]
+    return 500
+
+
+def error_response(exc: Exception) -> JSONResponse:
+    """Build the JSON answer for ``exc``: its status from the table, ``str(exc)`` as detail."""
+    if isinstance(exc, RequestValidationError):
+        detail = format_validation_errors(exc.errors())
+    else:
+        detail = str(exc)
+    return JSONResponse({"detail": detail}, status_code=status_for(exc))
+
+
+async def _handle_listed(_request: Request, exc: Exception) -> JSONResponse:
+    return error_response(exc)
+
+
+async def _handle_http_exception(_request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, StarletteHTTPException)
+    if exc.status_code == 400 and exc.detail == _FASTAPI_BODY_PARSE_ERROR:
+        return JSONResponse({"detail": "body: is not valid JSON text"}, status_code=422)
+    return JSONResponse(
+        {"detail": str(exc.detail)}, status_code=exc.status_code, headers=exc.headers
+    )
+
+
+async def _handle_unexpected(_request: Request, exc: Exception) -> JSONResponse:
+    logger.exception("unhandled error", exc_info=exc)
+    return JSONResponse({"detail": "internal error"}, status_code=500)
+
+
+def register_error_handlers(app: FastAPI) -> None:
+    """Install a handler for every row of :data:`STATUS_CODES`, plus HTTP and catch-all ones."""
+    for cls in STATUS_CODES:
+        app.add_exception_handler(cls, _handle_listed)
+    app.add_exception_handler(StarletteHTTPException, _handle_http_exception)
+    app.add_exception_handler(Exception, _handle_unexpected)
+
+
+# --- FastAPI validation errors as one sentence -------------------------------------------
+
+_TYPE_MESSAGES: Final[dict[str, str]] = {
+    "missing": "is required",
+    "extra_forbidden": "is not a known input",
+    "float_type": "must be a number",
+    "float_parsing": "must be a number",
+    "finite_number": "must be a finite number",
+    "int_type": "must be a whole number",
+    "int_parsing": "must be a whole number",
+    "int_from_float": "must be a whole number",
+    "bool_type": "must be true or false",
+    "string_type": "must be a string",
+    "dict_type": "must be a JSON object",
+    "model_type": "must be a JSON object",
+    "model_attributes_type": "must be a JSON object",
+    "tuple_type": "must be a [lon, lat] pair of numbers",
+    "list_type": "must be a list",
+    "none_required": "must be null",
+}
+
+
+def _location(loc: Sequence[int | str]) -> str:
+    parts = list(loc)
+    if len(parts) > 1 and parts[0] in ("body", "query", "path", "header", "cookie"):
+        parts = parts[1:]
+    text = ""
+    for part in parts:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += f".{part}" if text else str(part)
+    return text or "body"
+
+
+def _problem(error: Mapping[str, Any]) -> str:
+    kind = str(error.get("type", ""))
+    ctx: Mapping[str, Any] = error.get("ctx") or {}
+    if kind == "json_invalid":
+        return f"is not valid JSON ({ctx.get('error', 'decode error')})"
+    if kind == "literal_error":
+        return f"must be {ctx.get('expected', 'one of the allowed values')}"
+    if kind in ("too_long", "string_too_long"):
+        limit = ctx.get("max_length")
+        return f"is too long (at most {limit} characters)" if limit else "is too long"
+    if kind in ("too_short", "string_too_short"):
+        return "is too short"
+    if kind == "greater_than_equal":
+        return f"must be at least {ctx.get('ge')}"
+    if kind == "greater_than":
+        return f"must be greater than {ctx.get('gt')}"
+    if kind == "less_than_equal":
+        return f"must be at most {ctx.get('le')}"
+    if kind == "less_than":
+        return f"must be less than {ctx.get('lt')}"
+    if kind == "model_attributes_type" and isinstance(error.get("input"), (bytes, str)):
+        return "must be a JSON object sent as Content-Type: application/json"
+    if kind in _TYPE_MESSAGES:
+        return _TYPE_MESSAGES[kind]
+    message = str(error.get("msg", "is not valid"))
+    return message[:1].lower() + message[1:]
+
+
+def format_validation_errors(errors: Iterable[Mapping[str, Any]]) -> str:
+    """Turn FastAPI's list of validation errors into one sentence.
+
+    Parameters
+    ----------
+    errors : iterable of dict
+        ``RequestValidationError.errors()``: dicts with ``loc``, ``type``, ``msg``, ``ctx``.
+
+    Returns
+    -------
+    str
+        ``"<input>: <problem>"`` per error, joined with ``"; "``.
+
+    Examples
+    --------
+    >>> format_validation_errors([{"loc": ("body", "interval_m"), "type": "missing"}])
+    'interval_m: is required'
+    >>> format_validation_errors([{"loc": ("body", "start", 0), "type": "float_parsing"}])
+    'start[0]: must be a number'
+    """
+    sentences: list[str] = []
+    for error in errors:
+        kind = str(error.get("type", ""))
+        loc = tuple(error.get("loc", ()))
+        if kind == "json_invalid":
+            loc = loc[:1]  # FastAPI puts the character offset after "body"
+        sentence = f"{_location(loc)}: {_problem(error)}"
+        if sentence not in sentences:
+            sentences.append(sentence)
+    return "; ".join(sentences) or "body: is not valid"
+
+
+# --- Request body limit ---------------------------------------------------------------------
+
+
+class BodySizeLimitMiddleware:
+    """ASGI middleware answering 413 to request bodies over ``max_body_bytes``.
+
+    A declared ``Content-Length`` over the limit is refused before anything is read. Otherwise
+    the body is read (at most ``max_body_bytes`` of it) and counted as it streams in, so a
+    chunked or lying request is refused as soon as it passes the limit; a body within the limit
+    is handed to the app unchanged.
+
+    Parameters
+    ----------
+    app : ASGIApp
+        The application to protect.
+    max_body_bytes : int
+        Largest body accepted [bytes].
+    """
+
+    def __init__(self, app: ASGIApp, *, max_body_bytes: int) -> None:
+        self.app = app
+        self.max_body_bytes = max_body_bytes
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Buffer and count the body, then run the app or answer 413."""
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        limit = self.max_body_bytes
+        if _declared_length(scope) > limit:
+            await error_response(BodyTooLargeError(limit))(scope, receive, send)
+            return
+
+        chunks: list[bytes] = []
+        size = 0
+        while True:
+            message = await receive()
+            if message["type"] != "http.request":  # the client went away
+                return
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > limit:
+                await error_response(BodyTooLargeError(limit))(scope, receive, send)
+                return
+            chunks.append(chunk)
+            if not message.get("more_body", False):
+                break
+
+        replayed = False
+
+        async def replay() -> Message:
+            nonlocal replayed
+            if not replayed:
+                replayed = True
+                return {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+            return await receive()
+
+        await self.app(scope, replay, send)
+
+
+def _declared_length(scope: Scope) -> int:
+    for key, value in scope.get("headers", ()):
+        if key == b"content-length":
+            try:
+                return int(value)
+            except ValueError:
+                return -1
+    return -1

@@ -1,0 +1,51 @@
+"""The FastAPI application: ``create_app()`` wires routers, error handlers and the map page.
+
+Run it with ``tillpath serve`` (uvicorn's factory mode: ``app.main:create_app``).
+"""
+
+from __future__ import annotations
+
+from fastapi import FastAPI
+
+from app.errors import BodySizeLimitMiddleware, register_error_handlers
+from app.routers import health, pages, plans
+from app.settings import Settings, get_settings
+
+API_PREFIX = "/api"
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the application.
+
+    Parameters
+    ----------
+    settings : Settings, optional
+        Settings to use instead of the environment's (they then also replace the
+        ``get_settings`` dependency, so the database and the page see them too).
+
+    Returns
+    -------
+    FastAPI
+    """
+    app = FastAPI(
+        title="tillpath",
+        summary="Tillage paths for autonomous walk-behind hand tractors",
+        description=(
+            "Plan back-and-forth coverage paths over a field, store them and download their "
+            "waypoints. Coordinates are WGS84 `[lon, lat]`; errors are "
+            '`{"detail": "<input>: <problem>"}`.'
+        ),
+        version="0.1.0",
+    )
+    if settings is not None:
+        app.dependency_overrides[get_settings] = lambda: settings
+    else:
+        settings = get_settings()
+
+    app.include_router(plans.router, prefix=API_PREFIX)
+    app.include_router(health.router, prefix=API_PREFIX)
+    register_error_handlers(app)
+    app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes)
+
+    pages.mount_pages(app)
+    return app

@@ -1,0 +1,1 @@
+"""HTTP routers: plans, simulations, runs, health and the map page."""

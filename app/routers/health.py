@@ -1,0 +1,23 @@
+"""``/api/health``: whether the app is up and can reach its database."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Response, status
+from sqlalchemy import text
+from sqlalchemy.exc import SQLAlchemyError
+
+from app.db import SessionDep
+from app.schemas import Health
+
+router = APIRouter(tags=["health"])
+
+
+@router.get("/health", response_model=Health, responses={503: {"model": Health}})
+def read_health(session: SessionDep, response: Response) -> Health:
+    """Answer ``ok`` if a query reaches the database, else 503 with ``database: error``."""
+    try:
+        session.execute(text("SELECT 1")).scalar_one()
+    except SQLAlchemyError:
+        response.status_code = status.HTTP_503_SERVICE_UNAVAILABLE
+        return Health(status="error", database="error")
+    return Health(status="ok", database="ok")

@@ -1,0 +1,97 @@
+"""The map page at ``/``, its static files and the front-end libraries installed by npm.
+
+The page works like TiTiler's viewer: the server renders one HTML template and passes every URL
+the browser needs (the plans API, the tile servers) in ``data-`` attributes; ``static/js/map.js``
+fetches plans from the API as JSON and draws them. No planning happens in the browser.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, FastAPI, Request
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
+from fastapi.templating import Jinja2Templates
+from starlette.routing import NoMatchFound
+
+from app.settings import Settings, get_settings
+
+logger = logging.getLogger(__name__)
+
+#: The repository root: templates, static files and node_modules live beside ``app/``.
+ROOT = Path(__file__).resolve().parents[2]
+TEMPLATES_DIR = ROOT / "templates"
+STATIC_DIR = ROOT / "static"
+NODE_MODULES = ROOT / "node_modules"
+
+#: URL prefix and route name -> the ``dist`` folder of an npm package. Only the built files are
+#: served, never the packages' sources or anything else under node_modules.
+VENDOR_DIRS: dict[str, tuple[str, Path]] = {
+    "/vendor/leaflet": ("vendor-leaflet", NODE_MODULES / "leaflet" / "dist"),
+    "/vendor/leaflet-geoman": (
+        "vendor-leaflet-geoman",
+        NODE_MODULES / "@geoman-io" / "leaflet-geoman-free" / "dist",
+    ),
+}
+
+#: Where the plans API lives when its route cannot be looked up by name.
+PLANS_API_FALLBACK = "/api/plans"
+
+templates = Jinja2Templates(directory=TEMPLATES_DIR)
+router = APIRouter(include_in_schema=False)
+
+
+def _plans_api_url(request: Request) -> str:
+    """Return the URL of the plans collection (``GET /api/plans``).
+
+    Parameters
+    ----------
+    request : Request
+        The page request; its base URL (and any ``root_path``) is honoured.
+
+    Returns
+    -------
+    str
+        Absolute URL; the page derives ``/preview``, ``/{id}`` and ``/{id}/export/{format}``
+        from it.
+    """
+    try:
+        return str(request.url_for("list_plans"))
+    except NoMatchFound:
+        # The API router names its handler ``list_plans`` (style guide); if it ever does not,
+        # the documented path still works.
+        return str(request.base_url).rstrip("/") + PLANS_API_FALLBACK
+
+
+@router.get("/", response_class=HTMLResponse, name="map_page")
+def map_page(
+    request: Request, settings: Annotated[Settings, Depends(get_settings)]
+) -> HTMLResponse:
+    """Render the map page: draw a field, plan a path, save and download it."""
+    context = {
+        "plans_url": _plans_api_url(request),
+        "satellite_tile_url": settings.satellite_tile_url,
+        "street_tile_url": settings.street_tile_url,
+    }
+    return templates.TemplateResponse(request, "map.html", context)
+
+
+def mount_pages(app: FastAPI) -> None:
+    """Add the map page, its static files and the npm-served libraries to ``app``.
+
+    Parameters
+    ----------
+    app : FastAPI
+        The application; gets the ``/`` route, ``/static`` and ``/vendor/...`` mounts.
+    """
+    app.include_router(router)
+    app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
+    for prefix, (name, directory) in VENDOR_DIRS.items():
+        if not directory.is_dir():
+            # Serve the API anyway; the page explains what is missing instead of the app
+            # refusing to start.
+            logger.warning("%s is missing: run `npm ci` (make run does it)", directory)
+        app.mount(prefix, StaticFiles(directory=directory, check_dir=False), name=name)

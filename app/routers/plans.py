@@ -1,0 +1,99 @@
+"""``/api/plans``: preview, create, list, read, delete and export plans (product.md §5)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Path, Query, Response, status
+
+from app import services
+from app.db import SessionDep
+from app.models import Plan
+from app.schemas import ErrorRead, ExportFormat, PlanCreate, PlanList, PlanRead
+
+router = APIRouter(prefix="/plans", tags=["plans"])
+
+_BAD_INPUT: dict[int | str, dict[str, Any]] = {
+    422: {"model": ErrorRead, "description": "The input named in `detail` is wrong"}
+}
+_NOT_FOUND: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorRead, "description": "No such plan"}
+}
+_TOO_LARGE: dict[int | str, dict[str, Any]] = {
+    413: {"model": ErrorRead, "description": "Body over the configured limit"}
+}
+
+
+@router.post("/preview", response_model=PlanRead, responses={**_BAD_INPUT, **_TOO_LARGE})
+def preview_plan(body: PlanCreate) -> Plan:
+    """Plan a coverage path without storing it (``id`` and ``created_at`` are null)."""
+    return services.plan_field(body)
+
+
+@router.post(
+    "",
+    response_model=PlanRead,
+    status_code=status.HTTP_201_CREATED,
+    responses={**_BAD_INPUT, **_TOO_LARGE},
+)
+def create_plan(body: PlanCreate, session: SessionDep, response: Response) -> Plan:
+    """Plan a coverage path and store it; ``Location`` names the new plan."""
+    plan = services.plan_field(body)
+    session.add(plan)
+    session.commit()
+    response.headers["Location"] = f"/api/plans/{plan.id}"
+    return plan
+
+
+@router.get("", response_model=PlanList, responses=_BAD_INPUT)
+def list_plans(
+    session: SessionDep,
+    limit: Annotated[int, Query(ge=1, le=200, description="Page size.")] = 50,
+    offset: Annotated[int, Query(ge=0, le=1_000_000_000, description="Plans to skip.")] = 0,
+) -> PlanList:
+    """List stored plans, newest first, with their figures but no geometry."""
+    return services.list_plans(session, limit=limit, offset=offset)
+
+
+@router.get("/{plan_id}", response_model=PlanRead, responses={**_NOT_FOUND, **_BAD_INPUT})
+def read_plan(plan_id: int, session: SessionDep) -> Plan:
+    """Return one stored plan with its request, figures, waypoints and GeoJSON."""
+    return services.read_plan(session, plan_id)
+
+
+@router.delete(
+    "/{plan_id}",
+    status_code=status.HTTP_204_NO_CONTENT,
+    response_class=Response,
+    responses={**_NOT_FOUND, **_BAD_INPUT},
+)
+def delete_plan(plan_id: int, session: SessionDep) -> None:
+    """Delete a stored plan (and, later, its simulations and runs)."""
+    session.delete(services.read_plan(session, plan_id))
+    session.commit()
+
+
+@router.get(
+    "/{plan_id}/export/{format}",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "The plan as a file download",
+            "content": {media: {} for media, _ in services.EXPORT_TYPES.values()},
+        },
+        **_NOT_FOUND,
+        **_BAD_INPUT,
+    },
+)
+def export_plan(
+    plan_id: int,
+    fmt: Annotated[ExportFormat, Path(alias="format", description="File format.")],
+    session: SessionDep,
+) -> Response:
+    """Download a stored plan as GPX, GeoJSON, CSV or waypoints JSON."""
+    export = services.export_plan(services.read_plan(session, plan_id), fmt)
+    return Response(
+        content=export.content,
+        media_type=export.media_type,
+        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
+    )

@@ -1,0 +1,209 @@
+"""Thin adapters: request schema -> planner -> ORM row, and stored rows -> downloads.
+
+No geometry is computed here: the planner parses, validates and plans; this module only moves
+values between the planner's types, the schemas and the table. Planner errors pass through
+untouched (``app.errors`` maps them to HTTP).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+import unicodedata
+from dataclasses import dataclass
+from typing import Any, Final
+
+from shapely import Polygon
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+import planner
+from app.errors import NotFoundError
+from app.models import PLAN_NAME_MAX_LENGTH, Plan
+from app.schemas import ExportFormat, PlanCreate, PlanList, PlanSummary
+from planner.export import (
+    plan_from_geojson,
+    plan_to_csv,
+    plan_to_geojson,
+    plan_to_gpx,
+    plan_to_waypoints_json,
+)
+from planner.types import CoveragePlan, PlanStats, Waypoint
+
+#: Ids outside this range cannot exist (``plans.id`` is a 32-bit integer): 404 at once.
+MAX_ID: Final = 2**31 - 1
+
+#: Media type and file extension of each download.
+EXPORT_TYPES: Final[dict[str, tuple[str, str]]] = {
+    "gpx": ("application/gpx+xml", "gpx"),
+    "geojson": ("application/geo+json", "geojson"),
+    "csv": ("text/csv; charset=utf-8", "csv"),
+    "json": ("application/json", "json"),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class ExportFile:
+    """A download: its text, media type and file name."""
+
+    content: str
+    media_type: str
+    filename: str
+
+
+def plan_field(body: PlanCreate) -> Plan:
+    """Plan the request's field and return an unsaved :class:`Plan` row.
+
+    Start and finish are the request's if given, else the field FeatureCollection's points
+    with role ``start``/``finish``; the name likewise falls back on the field's name.
+
+    Parameters
+    ----------
+    body : PlanCreate
+        The validated request.
+
+    Returns
+    -------
+    Plan
+        Transient: ``id`` and ``created_at`` stay None until it is added and flushed.
+
+    Raises
+    ------
+    PlannerError
+        If the field or a parameter cannot be planned (the message names which).
+    """
+    spec = planner.parse_field_geojson(body.field)
+    start = _position(body.start, "start") or spec.start_lonlat
+    finish = _position(body.finish, "finish") or spec.finish_lonlat
+    coverage = planner.plan_coverage(
+        spec.field_lonlat,
+        interval_m=body.interval_m,
+        start_lonlat=start,
+        finish_lonlat=finish,
+        angle_deg=body.angle_deg,
+        objective=body.objective,
+        headland_passes=body.headland_passes,
+        speed_mps=body.speed_mps,
+    )
+    name = (body.name or "").strip() or (spec.name or "").strip() or None
+    if name is not None:
+        name = name[:PLAN_NAME_MAX_LENGTH]
+    request: dict[str, Any] = {
+        "name": name,
+        "field": polygon_to_geojson(spec.field_lonlat),
+        "interval_m": body.interval_m,
+        "start": list(start) if start else None,
+        "finish": list(finish) if finish else None,
+        "angle_deg": body.angle_deg,
+        "objective": body.objective,
+        "headland_passes": body.headland_passes,
+        "speed_mps": body.speed_mps,
+    }
+    return Plan(
+        name=name,
+        request=request,
+        stats=coverage.stats.as_dict(),
+        waypoints=[_waypoint_dict(w) for w in coverage.waypoints],
+        geojson=plan_to_geojson(coverage, name=name),
+    )
+
+
+def read_plan(session: Session, plan_id: int) -> Plan:
+    """Return stored plan ``plan_id``.
+
+    Raises
+    ------
+    NotFoundError
+        If there is no such plan.
+    """
+    plan = session.get(Plan, plan_id) if 1 <= plan_id <= MAX_ID else None
+    if plan is None:
+        raise NotFoundError("plan", plan_id)
+    return plan
+
+
+def list_plans(session: Session, *, limit: int, offset: int) -> PlanList:
+    """Return a page of stored plans, newest first, without their geometry."""
+    total = session.scalar(select(func.count()).select_from(Plan)) or 0
+    rows = session.execute(
+        select(Plan.id, Plan.name, Plan.created_at, Plan.stats)
+        .order_by(Plan.created_at.desc(), Plan.id.desc())
+        .limit(limit)
+        .offset(offset)
+    ).all()
+    return PlanList(items=[PlanSummary.model_validate(row) for row in rows], total=total)
+
+
+def export_plan(plan: Plan, fmt: ExportFormat) -> ExportFile:
+    """Write stored ``plan`` as a download in format ``fmt``.
+
+    GeoJSON is the stored collection itself; GPX, CSV and waypoints JSON come from the
+    planner's writers, fed with the stored plan (no re-planning).
+    """
+    media_type, extension = EXPORT_TYPES[fmt]
+    filename = f"{export_basename(plan)}.{extension}"
+    if fmt == "geojson":
+        content = _json_text(plan.geojson)
+    else:
+        coverage = coverage_plan_from_row(plan)
+        if fmt == "gpx":
+            content = plan_to_gpx(coverage, name=plan.name or f"plan {plan.id}")
+        elif fmt == "csv":
+            content = plan_to_csv(coverage)
+        else:
+            content = _json_text(plan_to_waypoints_json(coverage))
+    return ExportFile(content=content, media_type=media_type, filename=filename)
+
+
+def export_basename(plan: Plan) -> str:
+    """Return a safe file name stem from the plan's name, else ``plan-<id>``.
+
+    Examples
+    --------
+    >>> export_basename(Plan(id=7, name="Sawah Ketewel – blok 3"))
+    'sawah-ketewel-blok-3'
+    >>> export_basename(Plan(id=7, name="../"))
+    'plan-7'
+    """
+    ascii_name = unicodedata.normalize("NFKD", plan.name or "").encode("ascii", "ignore").decode()
+    slug = re.sub(r"[^a-z0-9]+", "-", ascii_name.lower()).strip("-")[:60].strip("-")
+    return slug or f"plan-{plan.id}"
+
+
+def coverage_plan_from_row(plan: Plan) -> CoveragePlan:
+    """Rebuild the planner's :class:`CoveragePlan` from a stored row, for the writers.
+
+    The stored GeoJSON holds the whole plan (``planner.export.plan_from_geojson`` reads it
+    back); the figures come from the row, which also keeps ``planning_ms``.
+    """
+    stats_fields = {f.name for f in dataclasses.fields(PlanStats)}
+    stats = PlanStats(**{k: v for k, v in plan.stats.items() if k in stats_fields})
+    return dataclasses.replace(plan_from_geojson(plan.geojson), stats=stats)
+
+
+def polygon_to_geojson(polygon: Polygon) -> dict[str, Any]:
+    """Return ``polygon`` as a GeoJSON Polygon geometry, coordinates at full precision."""
+    rings = [polygon.exterior, *polygon.interiors]
+    return {
+        "type": "Polygon",
+        "coordinates": [[[x, y] for x, y, *_ in ring.coords] for ring in rings],
+    }
+
+
+def _position(value: tuple[float, float] | None, name: str) -> tuple[float, float] | None:
+    return None if value is None else planner.parse_position(value, input_name=name)
+
+
+def _waypoint_dict(waypoint: Waypoint) -> dict[str, Any]:
+    return {
+        "seq": waypoint.seq,
+        "lon": waypoint.lon,
+        "lat": waypoint.lat,
+        "role": waypoint.role,
+        "line": waypoint.line,
+    }
+
+
+def _json_text(obj: Any) -> str:
+    return json.dumps(obj, ensure_ascii=False, allow_nan=False) + "\n"

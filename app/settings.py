@@ -1,0 +1,45 @@
+"""Application settings, read from the environment (``TILLPATH_*``) by pydantic-settings."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+#: Esri World Imagery, the satellite layer of the map page.
+ESRI_WORLD_IMAGERY_URL = (
+    "https://server.arcgisonline.com/ArcGIS/rest/services/World_Imagery/MapServer/tile/{z}/{y}/{x}"
+)
+#: OpenStreetMap's standard tiles.
+OSM_TILE_URL = "https://tile.openstreetmap.org/{z}/{x}/{y}.png"
+
+
+class Settings(BaseSettings):
+    """Everything the app reads from its environment.
+
+    Each attribute can be set with ``TILLPATH_<NAME>`` (for example
+    ``TILLPATH_DATABASE_URL=postgresql+psycopg://user@host/db``).
+
+    Attributes
+    ----------
+    database_url : str
+        SQLAlchemy URL. The default is a SQLite file under ``./data/`` (created on first use).
+    satellite_tile_url, street_tile_url : str
+        Leaflet tile URL templates; point them at an offline tile server if needed.
+    max_body_bytes : int
+        Largest request body accepted [bytes]; larger ones get 413.
+    """
+
+    model_config = SettingsConfigDict(env_prefix="TILLPATH_", extra="ignore")
+
+    database_url: str = "sqlite:///./data/tillpath.db"
+    satellite_tile_url: str = ESRI_WORLD_IMAGERY_URL
+    street_tile_url: str = OSM_TILE_URL
+    max_body_bytes: int = Field(default=2 * 1024 * 1024, ge=1)
+
+
+@lru_cache
+def get_settings() -> Settings:
+    """Return the process-wide settings (cached; tests override this dependency)."""
+    return Settings()

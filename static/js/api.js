@@ -1,0 +1,74 @@
+// The plans API (product.md §5). Every URL derives from the one the server put in the page, so
+// the page keeps working behind a proxy or under a path prefix.
+
+/** A refused or failed request: `status` is 0 when the server could not be reached. */
+export class ApiError extends Error {
+  constructor(status, detail) {
+    super(typeof detail === "string" ? detail : `HTTP ${status}`);
+    this.name = "ApiError";
+    this.status = status;
+    this.detail = detail;
+  }
+}
+
+async function requestJson(url, { method = "GET", body } = {}) {
+  const options = { method, headers: { Accept: "application/json" } };
+  if (body !== undefined) {
+    options.headers["Content-Type"] = "application/json";
+    options.body = JSON.stringify(body);
+  }
+  let response;
+  try {
+    response = await fetch(url, options);
+  } catch {
+    throw new ApiError(0, null);
+  }
+  if (!response.ok) {
+    let detail = null;
+    try {
+      detail = (await response.json()).detail ?? null;
+    } catch {
+      // Not JSON (a proxy's error page, say): the status alone has to do.
+    }
+    throw new ApiError(response.status, detail);
+  }
+  return response.status === 204 ? null : response.json();
+}
+
+/** Client for one tillpath server, given the URL of its plans collection. */
+export class PlansApi {
+  constructor(plansUrl) {
+    this.plansUrl = plansUrl.replace(/\/+$/, "");
+  }
+
+  planUrl(id) {
+    return `${this.plansUrl}/${encodeURIComponent(id)}`;
+  }
+
+  exportUrl(id, format) {
+    return `${this.planUrl(id)}/export/${format}`;
+  }
+
+  /** Plan without storing (POST /preview). */
+  preview(request) {
+    return requestJson(`${this.plansUrl}/preview`, { method: "POST", body: request });
+  }
+
+  /** Plan and store; the answer carries the new `id`. */
+  create(request) {
+    return requestJson(this.plansUrl, { method: "POST", body: request });
+  }
+
+  /** Newest first: `{items, total}`. */
+  list({ limit = 50, offset = 0 } = {}) {
+    return requestJson(`${this.plansUrl}?limit=${limit}&offset=${offset}`);
+  }
+
+  read(id) {
+    return requestJson(this.planUrl(id));
+  }
+
+  remove(id) {
+    return requestJson(this.planUrl(id), { method: "DELETE" });
+  }
+}

@@ -1,0 +1,17 @@
+"""The examples in the app's docstrings run (pytest collects doctests only under planner/)."""
+
+from __future__ import annotations
+
+import doctest
+
+import pytest
+
+import app.errors
+import app.services
+
+
+@pytest.mark.parametrize("module", [app.errors, app.services])
+def test_docstring_examples_hold(module: object):
+    result = doctest.testmod(module, raise_on_error=False)  # type: ignore[arg-type]
+    assert result.attempted > 0
+    assert result.failed == 0

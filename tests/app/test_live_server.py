@@ -1,0 +1,202 @@
+"""The app under a real uvicorn server, on committed sessions: concurrency and streamed bodies.
+
+Unlike the other API tests (one rolled-back session per test), these use the app's own
+sessions on a database made for the test (a SQLite file, and a PostgreSQL database when
+``TILLPATH_TEST_DATABASE_URL`` is set), which is dropped afterwards.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+import uuid
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import httpx2
+import pytest
+import uvicorn
+from sqlalchemy import create_engine, text
+from sqlalchemy.engine import make_url
+
+from app.db import get_engine, upgrade_database
+from app.main import create_app
+from app.settings import Settings
+
+PG_URL_ENV = "TILLPATH_TEST_DATABASE_URL"
+DATABASES = [
+    "sqlite",
+    *(
+        [pytest.param("postgresql", marks=pytest.mark.postgres)]
+        if os.environ.get(PG_URL_ENV)
+        else []
+    ),
+]
+MAX_BODY_BYTES = 64 * 1024
+PAPER = {
+    "type": "Polygon",
+    "coordinates": [
+        [
+            [115.298, -8.6265],
+            [115.29813989, -8.62649238],
+            [115.29814712, -8.62631751],
+            [115.29800448, -8.62632237],
+            [115.298, -8.6265],
+        ]
+    ],
+}
+
+
+def _admin(base_url: str, sql: str) -> None:
+    engine = create_engine(base_url, isolation_level="AUTOCOMMIT")
+    try:
+        with engine.connect() as conn:
+            conn.execute(text(sql))
+    finally:
+        engine.dispose()
+
+
+@pytest.fixture(params=DATABASES)
+def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    """A freshly migrated database; PostgreSQL's is dropped after the test."""
+    if request.param == "sqlite":
+        url = f"sqlite:///{tmp_path / 'tillpath.db'}"
+        upgrade_database(url)
+        yield url
+        get_engine(url).dispose()
+        get_engine.cache_clear()
+        return
+    base_url = os.environ[PG_URL_ENV]
+    name = f"tillpath_live_{uuid.uuid4().hex[:12]}"
+    _admin(base_url, f'CREATE DATABASE "{name}"')
+    url = make_url(base_url).set(database=name).render_as_string(hide_password=False)
+    try:
+        upgrade_database(url)
+        yield url
+    finally:
+        get_engine(url).dispose()
+        get_engine.cache_clear()
+        _admin(base_url, f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+@pytest.fixture
+def server_url(database_url: str) -> Iterator[str]:
+    """Serve the app with uvicorn on a loopback port, in a thread, for one test."""
+    app = create_app(Settings(database_url=database_url, max_body_bytes=MAX_BODY_BYTES))
+    port = free_port()
+    config = uvicorn.Config(
+        app, host="127.0.0.1", port=port, log_level="warning", lifespan="off", ws="none"
+    )
+    server = uvicorn.Server(config)
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 10
+    while not server.started:
+        assert thread.is_alive() and time.monotonic() < deadline, "uvicorn did not start"
+        time.sleep(0.01)
+    try:
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        server.should_exit = True
+        thread.join(timeout=10)
+
+
+def test_fifty_plans_from_ten_threads_are_all_stored_once(server_url: str):
+    def create_five(worker: int) -> list[dict[str, Any]]:
+        created = []
+        with httpx2.Client(base_url=server_url, timeout=30) as client:
+            for i in range(5):
+                body = {"name": f"w{worker}-p{i}", "field": PAPER, "interval_m": 4}
+                response = client.post("/api/plans", json=body)
+                assert response.status_code == 201, response.text
+                created.append(response.json())
+        return created
+
+    with ThreadPoolExecutor(max_workers=10) as pool:
+        results = [plan for plans in pool.map(create_five, range(10)) for plan in plans]
+
+    ids = [plan["id"] for plan in results]
+    assert len(ids) == 50 and len(set(ids)) == 50
+    with httpx2.Client(base_url=server_url) as client:
+        listing = client.get("/api/plans", params={"limit": 200}).json()
+        assert listing["total"] == 50
+        assert sorted(item["id"] for item in listing["items"]) == sorted(ids)
+        names = sorted(item["name"] for item in listing["items"])
+        assert names == sorted(f"w{w}-p{i}" for w in range(10) for i in range(5))
+        for plan in results[::10]:
+            assert client.get(f"/api/plans/{plan['id']}").json()["name"] == plan["name"]
+
+
+def test_streamed_body_over_limit_returns_413_and_stores_nothing(server_url: str):
+    def chunks() -> Iterator[bytes]:  # no Content-Length: sent chunked
+        yield b'{"field": {"type": "Polygon", "coordinates": [[['
+        for _ in range(MAX_BODY_BYTES // 1000 + 10):  # 1,000 bytes each
+            yield b"115.298, -8.6265], [" * 50
+        yield b'115.298, -8.6265]]]}, "interval_m": 4}'
+
+    with httpx2.Client(base_url=server_url, timeout=30) as client:
+        response = client.post(
+            "/api/plans", content=chunks(), headers={"content-type": "application/json"}
+        )
+        assert response.request.headers["transfer-encoding"] == "chunked"
+        assert "content-length" not in response.request.headers
+        assert response.status_code == 413
+        assert response.json() == {
+            "detail": f"body: the request is larger than the limit of {MAX_BODY_BYTES} bytes"
+        }
+        assert client.get("/api/plans").json() == {"items": [], "total": 0}
+
+
+def test_health_pings_the_database(server_url: str):
+    response = httpx2.get(f"{server_url}/api/health")
+    assert response.status_code == 200
+    assert response.json() == {"status": "ok", "database": "ok"}
+
+
+def test_tillpath_serve_migrates_then_serves(tmp_path: Path):
+    database = tmp_path / "data" / "tillpath.db"
+    port = free_port()
+    script = Path(sys.executable).parent / "tillpath"
+    command = [str(script)] if script.exists() else [sys.executable, "-m", "app.cli"]
+    env = {**os.environ, "TILLPATH_DATABASE_URL": f"sqlite:///{database}"}
+    process = subprocess.Popen(
+        [*command, "serve", "--host", "127.0.0.1", "--port", str(port), "--workers", "1"],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        deadline = time.monotonic() + 30
+        while True:
+            assert process.poll() is None, process.stderr.read() if process.stderr else ""
+            assert time.monotonic() < deadline, "tillpath serve did not answer in 30 s"
+            try:
+                response = httpx2.get(f"http://127.0.0.1:{port}/api/health", timeout=1)
+                break
+            except httpx2.TransportError:
+                time.sleep(0.1)
+        assert response.json() == {"status": "ok", "database": "ok"}
+        created = httpx2.post(
+            f"http://127.0.0.1:{port}/api/plans",
+            json={"name": "served", "field": PAPER, "interval_m": 4},
+            timeout=10,
+        )
+        assert created.status_code == 201, created.text
+    finally:
+        process.terminate()
+        process.wait(timeout=10)
+        if process.stderr:
+            process.stderr.close()
+    assert database.is_file()  # migrated into a directory that did not exist
