@@ -47,7 +47,10 @@ def plan_command(
     ],
     interval: Annotated[
         float | None,
-        typer.Option("--interval", help="Distance between tillage lines [m]; default: the file's interval_m."),
+        typer.Option(
+            "--interval",
+            help="Distance between tillage lines, in metres; default: the file's interval_m.",
+        ),
     ] = None,
     start: Annotated[
         str | None, typer.Option("--start", metavar="LON,LAT", help="Where the tractor enters.")
@@ -57,7 +60,10 @@ def plan_command(
     ] = None,
     angle: Annotated[
         float | None,
-        typer.Option("--angle", help="Line heading [deg from true north, 0–180); default: searched."),
+        typer.Option(
+            "--angle",
+            help="Line heading in degrees clockwise from true north, 0–180; default: searched.",
+        ),
     ] = None,
     objective: Annotated[
         ObjectiveChoice, typer.Option("--objective", help="What to minimise.")

@@ -1,0 +1,444 @@
+"""The tractor's control loop, simulated at 10 Hz on a plan's waypoints.
+
+Each step: the GPS receiver (5 Hz) and the compass (10 Hz) read the *true* state; the Kalman
+filter fuses them into an *estimated* state; guidance turns the estimate into a clutch
+command; the clutch servo applies it after its delay; the tractor moves (with wheel slip and
+heading disturbance); the filter predicts with the command the controller knows it gave. The
+true, measured and estimated states are logged side by side.
+
+The run ends when the last waypoint is reached (``completed``) or the time limit passes
+(``completed`` false): never a hang.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from navigation.compass import compass_heading_deg, magnetic_declination_deg
+from navigation.filters import PoseFilter
+from navigation.guidance import pure_pursuit_command, segment_progress, waypoint_command
+from navigation.metrics import TrackMetrics, score_track
+from navigation.sensors import GpsReceiver, gps_params, read_compass, validate_compass
+from navigation.types import (
+    GUIDANCE_MODES,
+    STRAIGHT,
+    GpsParams,
+    NavigationError,
+    SimulationConfig,
+    VehicleState,
+)
+from navigation.vehicle import TWO_PI, disturb, step, validate_vehicle, yaw_rate
+from planner.projection import LocalFrame, field_frame
+from planner.types import CoveragePlan
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Floating-point slack when comparing simulation times [s].
+_EPS_S = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class SimulationLog:
+    """A simulated run: true, measured and estimated tracks, and their metrics.
+
+    Positions are in the field's local frame (``frame``; x east, y true north, metres) and
+    headings clockwise from true north [rad]; :meth:`lonlat` converts to WGS84.
+
+    Attributes
+    ----------
+    plan : CoveragePlan
+        The plan that was followed.
+    config : SimulationConfig
+        The configuration, with the GPS preset resolved.
+    frame : LocalFrame
+        The local frame of the arrays.
+    completed : bool
+        The last waypoint was reached within the time limit.
+    time_s : array
+        Time of each control step [s].
+    true_x_m, true_y_m, true_heading_rad : arrays
+        True state at each step.
+    est_x_m, est_y_m, est_heading_rad : arrays
+        Filter estimate at each step.
+    clutch : int array
+        Clutch engaged at each step (-1 left, 0 none, 1 right).
+    target : int array
+        Index of the waypoint being steered to at each step.
+    gps_time_s, gps_x_m, gps_y_m : arrays
+        The GPS fixes.
+    reached_s : array
+        Time each waypoint was reached [s] (NaN if never; 0 for the start).
+    declination_deg : float
+        Magnetic declination used (WMM-2025) [deg].
+    metrics : TrackMetrics
+        Scores of the true track (:func:`navigation.metrics.score_track`) plus the filter and
+        GPS errors.
+    """
+
+    plan: CoveragePlan
+    config: SimulationConfig
+    frame: LocalFrame
+    completed: bool
+    time_s: FloatArray
+    true_x_m: FloatArray
+    true_y_m: FloatArray
+    true_heading_rad: FloatArray
+    est_x_m: FloatArray
+    est_y_m: FloatArray
+    est_heading_rad: FloatArray
+    clutch: npt.NDArray[np.int8]
+    target: npt.NDArray[np.int64]
+    gps_time_s: FloatArray
+    gps_x_m: FloatArray
+    gps_y_m: FloatArray
+    reached_s: FloatArray
+    declination_deg: float
+    metrics: TrackMetrics
+
+    def lonlat(self, which: str) -> tuple[FloatArray, FloatArray]:
+        """WGS84 ``(lon, lat)`` arrays of the ``true``, ``estimated`` or ``gps`` track."""
+        if which == "true":
+            return self.frame.to_lonlat_xy(self.true_x_m, self.true_y_m)
+        if which == "estimated":
+            return self.frame.to_lonlat_xy(self.est_x_m, self.est_y_m)
+        if which == "gps":
+            return self.frame.to_lonlat_xy(self.gps_x_m, self.gps_y_m)
+        raise ValueError(f"which: expected true, estimated or gps, got {which!r}")
+
+
+def _linearised_lonlat(
+    frame: LocalFrame, wp_x: FloatArray, wp_y: FloatArray
+) -> Callable[[int, float, float], tuple[float, float]]:
+    """Local ``(x, y)`` to WGS84 near each waypoint, for the waypoint law at 10 Hz.
+
+    The planner's projection is linearised about each waypoint once (its Jacobian from two
+    one-metre probes); within 100 m of the waypoint the error is below a millimetre, and the
+    law only cares about the direction and distance to that waypoint.
+    """
+    lon0, lat0 = frame.to_lonlat_xy(wp_x, wp_y)
+    lon_e, lat_e = frame.to_lonlat_xy(wp_x + 1.0, wp_y)
+    lon_n, lat_n = frame.to_lonlat_xy(wp_x, wp_y + 1.0)
+    table = [
+        (
+            float(wp_x[i]),
+            float(wp_y[i]),
+            float(lon0[i]),
+            float(lat0[i]),
+            float(lon_e[i] - lon0[i]),
+            float(lat_e[i] - lat0[i]),
+            float(lon_n[i] - lon0[i]),
+            float(lat_n[i] - lat0[i]),
+        )
+        for i in range(len(wp_x))
+    ]
+
+    def lonlat_near(i: int, x_m: float, y_m: float) -> tuple[float, float]:
+        x0, y0, lon, lat, dlon_dx, dlat_dx, dlon_dy, dlat_dy = table[i]
+        dx = x_m - x0
+        dy = y_m - y0
+        return lon + dlon_dx * dx + dlon_dy * dy, lat + dlat_dx * dx + dlat_dy * dy
+
+    return lonlat_near
+
+
+def validate_config(config: SimulationConfig) -> GpsParams:
+    """Check ``config``; return its GPS model.
+
+    Raises
+    ------
+    NavigationError
+        Naming the first bad setting.
+    """
+    validate_vehicle(config.vehicle)
+    validate_compass(config.compass)
+    gps = gps_params(config.gps)
+    g = config.guidance
+    if g.mode not in GUIDANCE_MODES:
+        raise NavigationError(
+            "guidance", f"unknown mode {g.mode!r}; choose one of {', '.join(GUIDANCE_MODES)}"
+        )
+    for name in ("heading_tolerance_deg", "line_tolerance_deg"):
+        value = getattr(g, name)
+        if not (math.isfinite(value) and 0.0 < value < 90.0):
+            raise NavigationError(name, f"must be in (0, 90) degrees, got {value}")
+    for name in ("acceptance_radius_m", "line_acceptance_radius_m"):
+        value = getattr(g, name)
+        if not (math.isfinite(value) and 0.0 < value <= 50.0):
+            raise NavigationError(name, f"must be in (0, 50] m, got {value}")
+    if not (math.isfinite(g.lookahead_m) and 0.0 < g.lookahead_m <= 100.0):
+        raise NavigationError("lookahead_m", f"must be in (0, 100] m, got {g.lookahead_m}")
+    if not (math.isfinite(config.dt_s) and 0.001 <= config.dt_s <= 1.0):
+        raise NavigationError("dt_s", f"must be in [0.001, 1] s, got {config.dt_s}")
+    if config.time_limit_s is not None and not (
+        math.isfinite(config.time_limit_s) and config.time_limit_s > 0
+    ):
+        raise NavigationError("time_limit_s", f"must be > 0, got {config.time_limit_s}")
+    k = config.kalman
+    if not (
+        k.position_sigma_m_per_sqrt_s > 0 and k.heading_sigma_deg_per_sqrt_s > 0
+    ):  # NaN fails too
+        raise NavigationError("kalman", "process noise sigmas must be > 0")
+    if not (
+        math.isfinite(config.initial_heading_sigma_deg)
+        and 0.0 <= config.initial_heading_sigma_deg <= 180.0
+    ):
+        raise NavigationError(
+            "initial_heading_sigma_deg",
+            f"must be in [0, 180], got {config.initial_heading_sigma_deg}",
+        )
+    return gps
+
+
+def simulate(
+    plan: CoveragePlan,
+    config: SimulationConfig,
+    rng: np.random.Generator,
+    *,
+    threshold_m: float = 1.0,
+    on_waypoint: Callable[[int, int], None] | None = None,
+) -> SimulationLog:
+    """Simulate the tractor driving ``plan`` and score the run.
+
+    Parameters
+    ----------
+    plan : CoveragePlan
+        The route; its first waypoint is where the tractor starts.
+    config : SimulationConfig
+        Vehicle, sensors, filter, guidance and loop settings.
+    rng : numpy.random.Generator
+        The only source of randomness: the same seed gives the same run.
+    threshold_m : float
+        Cross-track error threshold for the metrics' stretches [m].
+    on_waypoint : callable or None
+        Called as ``on_waypoint(reached, total)`` each time a waypoint is reached, for progress
+        reporting on long runs.
+
+    Returns
+    -------
+    SimulationLog
+
+    Raises
+    ------
+    NavigationError
+        For a bad configuration or a plan with fewer than two distinct waypoints.
+    """
+    gps_model = validate_config(config)
+    if len(plan.waypoints) < 2:
+        raise NavigationError(
+            "plan", f"needs at least two waypoints to drive, has {len(plan.waypoints)}"
+        )
+    config = dataclasses.replace(config, gps=gps_model)
+    frame = field_frame(plan.field_lonlat)
+    wp_lon = np.array([w.lon for w in plan.waypoints])
+    wp_lat = np.array([w.lat for w in plan.waypoints])
+    wp_x, wp_y = frame.to_local_xy(wp_lon, wp_lat)
+    leg = np.hypot(np.diff(wp_x), np.diff(wp_y))
+    if not (leg > 0).any():
+        raise NavigationError("plan", "all its waypoints are at the same place")
+    n_wp = len(wp_x)
+
+    veh = config.vehicle
+    guid = config.guidance
+    comp = config.compass
+    dt_s = config.dt_s
+    speed = veh.speed_mps
+    track = veh.track_width_m
+    path_length = float(leg.sum())
+    time_limit = (
+        config.time_limit_s
+        if config.time_limit_s is not None
+        else 3.0 * path_length / speed + 300.0
+    )
+    centre = plan.field_lonlat.centroid
+    declination = magnetic_declination_deg(centre.x, centre.y, date=config.date)
+
+    # Start at the first waypoint, facing roughly toward the next distinct one.
+    first = int(np.argmax(leg > 0)) + 1
+    heading0 = (
+        math.atan2(wp_x[first] - wp_x[0], wp_y[first] - wp_y[0])
+        + math.radians(config.initial_heading_sigma_deg) * rng.standard_normal()
+    )
+    state = VehicleState(float(wp_x[0]), float(wp_y[0]), heading0 % TWO_PI, STRAIGHT)
+
+    gps = GpsReceiver(gps_model, rng)
+    gps_sigma = gps_model.sigma_m
+    compass_sigma = math.radians(max(comp.noise_deg, 0.1))
+    fix = gps.read(state, 0.0)
+    reading = read_compass(state, rng, 0.0, declination_deg=declination, params=comp)
+    heading_meas = math.radians(compass_heading_deg(reading.mag_x, reading.mag_y, declination))
+    kf = PoseFilter(
+        np.array([fix.x_m, fix.y_m, heading_meas]),
+        np.diag([gps_sigma**2, gps_sigma**2, compass_sigma**2]),
+        params=config.kalman,
+    )
+    ex, ey, eh = fix.x_m, fix.y_m, heading_meas
+    gps_period = 1.0 / gps_model.rate_hz
+    compass_period = 1.0 / comp.rate_hz
+    next_gps = gps_period
+    next_compass = compass_period
+    gps_t = [0.0]
+    gps_x = [fix.x_m]
+    gps_y = [fix.y_m]
+    # Compass readings since the last filter update, summed as unit vectors (circular mean).
+    sum_sin = sum_cos = 0.0
+    n_compass = 0
+
+    delay_steps = int(round(veh.clutch_delay_s / dt_s))
+    servo: deque[int] = deque([STRAIGHT] * delay_steps)
+    reached = np.full(n_wp, np.nan)
+    reached[0] = 0.0
+    target = 1
+    tol_wp = guid.heading_tolerance_deg
+    tol_line = guid.line_tolerance_deg
+    radius = guid.acceptance_radius_m
+    line_radius = guid.line_acceptance_radius_m
+    line_mode = guid.mode == "line"
+    yaw_noise = veh.yaw_noise_deg_per_sqrt_s
+    speed_noise = veh.speed_noise
+    omega_turn = yaw_rate(1, speed_mps=speed, track_width_m=track)
+    # What the controller expects each clutch to do: (centre speed, yaw rate).
+    u_by_clutch = {-1: (0.5 * speed, -omega_turn), 0: (speed, 0.0), 1: (0.5 * speed, omega_turn)}
+    lonlat_near = _linearised_lonlat(frame, wp_x, wp_y) if not line_mode else None
+
+    log_t: list[float] = []
+    log_tx: list[float] = []
+    log_ty: list[float] = []
+    log_th: list[float] = []
+    log_ex: list[float] = []
+    log_ey: list[float] = []
+    log_eh: list[float] = []
+    log_cl: list[int] = []
+    log_tg: list[int] = []
+    completed = False
+    n_steps = int(math.ceil(time_limit / dt_s))
+    for k in range(n_steps + 1):
+        t = k * dt_s
+        # Sense: compass readings accumulate; each GPS fix triggers a filter update.
+        if t >= next_compass - _EPS_S:
+            reading = read_compass(state, rng, t, declination_deg=declination, params=comp)
+            h = math.radians(compass_heading_deg(reading.mag_x, reading.mag_y, declination))
+            sum_sin += math.sin(h)
+            sum_cos += math.cos(h)
+            n_compass += 1
+            next_compass += compass_period
+        if t >= next_gps - _EPS_S:
+            fix = gps.read(state, t)
+            gps_t.append(t)
+            gps_x.append(fix.x_m)
+            gps_y.append(fix.y_m)
+            next_gps += gps_period
+            if n_compass:
+                kf.update(
+                    gps_xy_m=(fix.x_m, fix.y_m),
+                    gps_sigma_m=gps_sigma,
+                    heading_rad=math.atan2(sum_sin, sum_cos),
+                    heading_sigma_rad=compass_sigma / math.sqrt(n_compass),
+                )
+            else:
+                kf.update(gps_xy_m=(fix.x_m, fix.y_m), gps_sigma_m=gps_sigma)
+            sum_sin = sum_cos = 0.0
+            n_compass = 0
+            ex, ey, eh = (float(v) for v in kf.ekf.x)
+
+        # Guide: advance past reached waypoints, then steer to the current one.
+        clutch = STRAIGHT
+        while True:
+            ax, ay = wp_x[target - 1], wp_y[target - 1]
+            bx, by = wp_x[target], wp_y[target]
+            along, _, length = segment_progress(ex, ey, ax, ay, bx, by)
+            if lonlat_near is None:
+                cmd = pure_pursuit_command(
+                    ex, ey, eh, ax, ay, bx, by, lookahead_m=guid.lookahead_m, tolerance_deg=tol_line
+                )
+            else:
+                lon, lat = lonlat_near(target, ex, ey)
+                cmd = waypoint_command(
+                    lon,
+                    lat,
+                    math.degrees(eh),
+                    wp_lon[target],
+                    wp_lat[target],
+                    tolerance_deg=tol_wp,
+                )
+            if along >= length or cmd.distance_m <= (line_radius if line_mode else radius):
+                reached[target] = t
+                target += 1
+                if on_waypoint is not None:
+                    on_waypoint(target, n_wp)
+                if target == n_wp:
+                    completed = True
+                    break
+                continue
+            clutch = cmd.clutch
+            break
+
+        log_t.append(t)
+        log_tx.append(state.x_m)
+        log_ty.append(state.y_m)
+        log_th.append(state.heading_rad)
+        log_ex.append(ex)
+        log_ey.append(ey)
+        log_eh.append(eh)
+        log_cl.append(state.clutch)
+        log_tg.append(min(target, n_wp - 1))
+        if completed or k == n_steps:
+            break
+
+        # Act: the servo engages the clutch commanded ``delay_steps`` steps ago.
+        servo.append(clutch)
+        engaged = servo.popleft()
+        v = speed * (1.0 + speed_noise * rng.standard_normal()) if speed_noise else speed
+        state = step(state, engaged, dt_s, speed_mps=v, track_width_m=track)
+        state = disturb(state, rng, dt_s, yaw_noise_deg_per_sqrt_s=yaw_noise)
+        ex, ey, eh = kf.propagate(*u_by_clutch[engaged], dt_s)
+
+    time_arr = np.array(log_t)
+    tx = np.array(log_tx)
+    ty = np.array(log_ty)
+    ex_a = np.array(log_ex)
+    ey_a = np.array(log_ey)
+    g_t = np.array(gps_t)
+    g_x = np.array(gps_x)
+    g_y = np.array(gps_y)
+    lon_true, lat_true = frame.to_lonlat_xy(tx, ty)
+    metrics = score_track(
+        plan, time_arr, lon_true, lat_true, threshold_m=threshold_m, completed=completed
+    )
+    # The true position at each fix time (fixes fall on control steps).
+    fix_step = np.clip(np.rint(g_t / dt_s).astype(np.int64), 0, len(tx) - 1)
+    metrics = dataclasses.replace(
+        metrics,
+        filter_rms_m=float(np.sqrt(np.mean((ex_a - tx) ** 2 + (ey_a - ty) ** 2))),
+        gps_rms_m=float(np.sqrt(np.mean((g_x - tx[fix_step]) ** 2 + (g_y - ty[fix_step]) ** 2))),
+    )
+    return SimulationLog(
+        plan=plan,
+        config=config,
+        frame=frame,
+        completed=completed,
+        time_s=time_arr,
+        true_x_m=tx,
+        true_y_m=ty,
+        true_heading_rad=np.array(log_th),
+        est_x_m=ex_a,
+        est_y_m=ey_a,
+        est_heading_rad=np.array(log_eh),
+        clutch=np.array(log_cl, dtype=np.int8),
+        target=np.array(log_tg, dtype=np.int64),
+        gps_time_s=g_t,
+        gps_x_m=g_x,
+        gps_y_m=g_y,
+        reached_s=reached,
+        declination_deg=declination,
+        metrics=metrics,
+    )
+
+
+__all__ = ["SimulationLog", "simulate", "validate_config"]

@@ -1,0 +1,145 @@
+"""score_track: any track against a plan, with figures known in advance."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from navigation import NavigationError, score_track
+from navigation.metrics import _polygon_mask
+from planner import local_frame
+
+#: The frame the hand-built plans are drawn in (tests/navigation/conftest.py).
+HAND_FRAME = local_frame(115.298, -8.6265)
+
+
+def track_lonlat(plan, x, y):  # type: ignore[no-untyped-def]
+    return HAND_FRAME.to_lonlat_xy(np.asarray(x, float), np.asarray(y, float))
+
+
+def local_waypoints(plan):  # type: ignore[no-untyped-def]
+    return HAND_FRAME.to_local_xy([w.lon for w in plan.waypoints], [w.lat for w in plan.waypoints])
+
+
+def drive(xs, ys, spacing=0.05):  # type: ignore[no-untyped-def]
+    """A dense polyline through the given vertices."""
+    out_x, out_y = [xs[0]], [ys[0]]
+    for x0, y0, x1, y1 in zip(xs[:-1], ys[:-1], xs[1:], ys[1:], strict=True):
+        n = max(int(math.hypot(x1 - x0, y1 - y0) / spacing), 1)
+        s = np.arange(1, n + 1) / n
+        out_x.extend(x0 + s * (x1 - x0))
+        out_y.extend(y0 + s * (y1 - y0))
+    return np.array(out_x), np.array(out_y)
+
+
+def test_a_track_on_the_plan_scores_zero_error_and_full_completion(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    wx, wy = local_waypoints(two_line_plan)
+    x, y = drive(wx, wy)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    t = np.arange(len(x)) * 0.1
+    m = score_track(two_line_plan, t, lon, lat)
+    assert m.completed
+    assert m.time_s == pytest.approx(t[-1])
+    assert m.distance_m == pytest.approx(4 + 30 + 4 + 30 + 4, rel=1e-6)
+    assert m.cross_track_max_m == pytest.approx(0.0, abs=1e-6)
+    assert m.waypoint_error_max_m == pytest.approx(0.0, abs=1e-6)
+    assert m.stretches == ()
+    # Two 4 m wide passes over an 8 m × 30 m field cover it all.
+    assert m.coverage_ratio == pytest.approx(1.0, abs=0.01)
+    assert m.fix_count == len(x)
+    assert m.filter_rms_m is None and m.gps_rms_m is None
+
+
+def test_an_offset_track_has_that_cross_track_error_and_loses_that_coverage(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    wx, wy = local_waypoints(two_line_plan)
+    # Drive both lines 0.8 m east of the plan.
+    x, y = drive(wx + 0.8, wy)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    m = score_track(two_line_plan, np.arange(len(x)) * 0.1, lon, lat, threshold_m=0.5)
+    assert m.cross_track_max_m == pytest.approx(0.8, abs=1e-3)
+    assert m.cross_track_rms_m == pytest.approx(0.8, abs=1e-3)
+    assert m.cross_track_p95_m == pytest.approx(0.8, abs=1e-3)
+    assert m.waypoint_error_max_m == pytest.approx(0.8, abs=1e-3)
+    # The footprint misses a 0.8 m strip along the west edge: 0.8 / 8 of the field.
+    assert m.coverage_ratio == pytest.approx(1.0 - 0.8 / 8.0, abs=0.01)
+    # One stretch per line, nearly as long as the line takes to drive (60 s): within 0.8 m
+    # of each end, the fixes are nearer the turn or transit leg than the line.
+    assert [s.line for s in m.stretches] == [0, 1]
+    for s in m.stretches:
+        assert s.max_error_m == pytest.approx(0.8, abs=1e-3)
+        assert (30.0 - 2 * 0.8) / 0.05 * 0.1 - 0.2 <= s.duration_s <= 60.0
+
+
+def test_a_track_that_stops_halfway_is_not_complete(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    wx, wy = local_waypoints(two_line_plan)
+    x, y = drive(wx[:3], wy[:3])
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    m = score_track(two_line_plan, np.arange(len(x)), lon, lat)
+    assert not m.completed
+    assert m.waypoint_errors_m[:3] == pytest.approx((0.0, 0.0, 0.0), abs=1e-6)
+    assert m.waypoint_errors_m[3] == pytest.approx(4.0, abs=1e-6)
+    assert m.coverage_ratio == pytest.approx(0.5, abs=0.01)
+
+
+def test_closest_approach_is_measured_to_the_polyline_not_just_its_vertices(straight_plan) -> None:  # type: ignore[no-untyped-def]
+    # Two fixes 100 m apart that pass 0.3 m beside both ends of the line.
+    lon, lat = track_lonlat(straight_plan, [0.3, 0.3], [-50.0, 150.0])
+    m = score_track(straight_plan, [0.0, 60.0], lon, lat)
+    assert m.waypoint_errors_m == pytest.approx((0.3, 0.3), abs=1e-6)
+
+
+def test_fixes_beyond_the_line_ends_are_not_on_the_line(straight_plan) -> None:  # type: ignore[no-untyped-def]
+    lon, lat = track_lonlat(straight_plan, [0.5, 0.5, 0.5, 3.0], [-10.0, 50.0, 110.0, 120.0])
+    m = score_track(straight_plan, [0, 1, 2, 3], lon, lat)
+    assert m.on_line_share == pytest.approx(0.25)
+    assert m.cross_track_max_m == pytest.approx(0.5, abs=1e-6)
+
+
+def test_no_fix_on_a_line_gives_no_cross_track_figures(straight_plan) -> None:  # type: ignore[no-untyped-def]
+    lon, lat = track_lonlat(straight_plan, [0.0], [-30.0])
+    m = score_track(straight_plan, [0.0], lon, lat)
+    assert m.cross_track_rms_m is None and m.cross_track_max_m is None
+    assert m.time_s == 0.0 and m.distance_m == 0.0
+    assert m.as_dict()["cross_track_rms_m"] is None
+
+
+def test_a_real_plan_scored_on_a_noisy_track(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    # Every vertex of the planned path, jittered by 0.3 m: errors are about that size.
+    rng = np.random.default_rng(9)
+    wx, wy = local_waypoints(paper_plan)
+    x, y = drive(wx, wy, spacing=0.5)
+    x = x + rng.normal(0, 0.3, len(x))
+    y = y + rng.normal(0, 0.3, len(y))
+    lon, lat = track_lonlat(paper_plan, x, y)
+    m = score_track(paper_plan, np.arange(len(x)), lon, lat)
+    assert m.completed
+    assert 0.2 < m.cross_track_rms_m < 0.4  # |N(0, 0.3)| across the line: RMS 0.3
+    assert m.coverage_ratio > 0.95
+
+
+@pytest.mark.parametrize(
+    ("time", "lon", "lat", "match"),
+    [
+        ([], [], [], "track: has no fixes"),
+        ([0.0, 1.0], [115.298], [-8.6265, -8.6265], "differ in length"),
+        ([1.0, 0.0], [115.298, 115.298], [-8.6265, -8.6265], "backwards"),
+        ([0.0, 1.0], [115.298, float("nan")], [-8.6265, -8.6265], "finite"),
+    ],
+)
+def test_bad_tracks_are_refused(straight_plan, time, lon, lat, match) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(NavigationError, match=match):
+        score_track(straight_plan, time, lon, lat)
+
+
+def test_polygon_mask_matches_shapely_on_a_field_with_a_hole() -> None:
+    poly = shapely.Polygon(
+        [(0, 0), (50, 3), (47, 40), (20, 25), (5, 45)], [[(10, 10), (20, 10), (15, 18)]]
+    )
+    cell = 0.37
+    nx, ny = int(60 / cell), int(50 / cell)
+    mask = _polygon_mask(poly, -2.0, -2.0, cell, nx, ny)
+    gx, gy = np.meshgrid(-2 + (np.arange(nx) + 0.5) * cell, -2 + (np.arange(ny) + 0.5) * cell)
+    assert np.array_equal(mask, shapely.contains_xy(poly, gx, gy))

@@ -1,0 +1,124 @@
+"""The simulator on the paper's scenario and on hand-built plans."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from navigation import (
+    GuidanceParams,
+    NavigationError,
+    SimulationConfig,
+    VehicleParams,
+    simulate,
+)
+from navigation.types import CompassParams
+
+
+@pytest.mark.parametrize("mode", ["waypoint", "line"])
+@pytest.mark.parametrize("gps", ["m8n", "rtk"])
+def test_the_paper_scenario_completes(paper_plan, mode: str, gps: str) -> None:  # type: ignore[no-untyped-def]
+    log = simulate(
+        paper_plan,
+        SimulationConfig(gps=gps, guidance=GuidanceParams(mode=mode)),
+        np.random.default_rng(0),
+    )
+    m = log.metrics
+    assert log.completed and m.completed
+    assert not np.isnan(log.reached_s).any()
+    assert np.all(np.diff(log.reached_s) >= 0)  # waypoints reached in order
+    # At 0.56 m/s, the ~101 m route takes at least 180 s; pivots and detours add some.
+    assert 101.0 / 0.56 < m.time_s < 2.0 * 101.0 / 0.56
+    assert m.coverage_ratio > 0.7
+    # The logs keep true, estimated and measured states side by side.
+    n = len(log.time_s)
+    assert len(log.true_x_m) == len(log.est_x_m) == len(log.clutch) == n
+    assert len(log.gps_time_s) == pytest.approx(m.time_s * 5 + 1, abs=2)  # 5 Hz
+
+
+def test_rtk_holds_the_lines_to_centimetres_in_line_mode(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    config = SimulationConfig(gps="rtk", guidance=GuidanceParams(mode="line"))
+    m = simulate(paper_plan, config, np.random.default_rng(1)).metrics
+    assert m.cross_track_rms_m < 0.2
+    assert m.filter_rms_m < 0.05
+
+
+def test_runs_are_reproducible_per_seed(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    config = SimulationConfig()
+    a = simulate(paper_plan, config, np.random.default_rng(42))
+    b = simulate(paper_plan, config, np.random.default_rng(42))
+    c = simulate(paper_plan, config, np.random.default_rng(43))
+    assert np.array_equal(a.true_x_m, b.true_x_m) and np.array_equal(a.gps_y_m, b.gps_y_m)
+    assert a.metrics == b.metrics
+    assert not np.array_equal(a.gps_x_m[:10], c.gps_x_m[:10])
+
+
+def test_line_mode_holds_tillage_lines_tighter_than_waypoint_mode(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    rms = {}
+    for mode in ("waypoint", "line"):
+        config = SimulationConfig(guidance=GuidanceParams(mode=mode))
+        rms[mode] = np.array(
+            [
+                simulate(paper_plan, config, np.random.default_rng(s)).metrics.cross_track_rms_m
+                for s in range(20)
+            ]
+        )
+    assert rms["line"].mean() < rms["waypoint"].mean()
+    assert np.median(rms["line"]) < np.median(rms["waypoint"])
+
+
+def test_time_limit_ends_an_unfinished_run(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    log = simulate(paper_plan, SimulationConfig(time_limit_s=30.0), np.random.default_rng(0))
+    assert not log.completed and not log.metrics.completed
+    assert log.time_s[-1] == pytest.approx(30.0)
+    assert np.isnan(log.reached_s[-1])
+
+
+def test_a_tractor_that_cannot_steer_never_finishes_but_stops(straight_plan) -> None:  # type: ignore[no-untyped-def]
+    # A compass off by 90° sends the tractor the wrong way: the time limit must end the run.
+    config = SimulationConfig(compass=CompassParams(bias_deg=90.0), time_limit_s=120.0)
+    log = simulate(straight_plan, config, np.random.default_rng(0))
+    assert not log.completed
+    assert log.time_s[-1] == pytest.approx(120.0)
+
+
+def test_clutch_servo_delay_shows_in_the_log(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    config = SimulationConfig(
+        gps="rtk", vehicle=dataclasses.replace(VehicleParams(), clutch_delay_s=1.0)
+    )
+    log = simulate(two_line_plan, config, np.random.default_rng(0))
+    assert log.completed
+    # The tractor pivots at the turn; the engaged clutch never changes within 1 s of the start.
+    assert (log.clutch[:10] == 0).all()
+    assert (log.clutch != 0).any()
+
+
+@pytest.mark.parametrize(
+    ("config", "match"),
+    [
+        (SimulationConfig(vehicle=VehicleParams(speed_mps=-0.56)), "^speed_mps: "),
+        (SimulationConfig(gps="ublox-9000"), "^gps: unknown preset 'ublox-9000'"),
+        (SimulationConfig(guidance=GuidanceParams(mode="teleport")), "^guidance: unknown mode"),  # type: ignore[arg-type]
+        (
+            SimulationConfig(guidance=GuidanceParams(acceptance_radius_m=0.0)),
+            "^acceptance_radius_m: ",
+        ),
+        (SimulationConfig(dt_s=0.0), "^dt_s: "),
+        (SimulationConfig(time_limit_s=-5.0), "^time_limit_s: "),
+        (SimulationConfig(compass=CompassParams(rate_hz=0.0)), "^compass.rate_hz: "),
+    ],
+)
+def test_bad_configurations_give_clear_errors(paper_plan, config, match) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(NavigationError, match=match):
+        simulate(paper_plan, config, np.random.default_rng(0))
+
+
+def test_a_plan_with_no_waypoints_is_refused(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    empty = dataclasses.replace(paper_plan, waypoints=())
+    with pytest.raises(NavigationError, match="^plan: needs at least two waypoints"):
+        simulate(empty, SimulationConfig(), np.random.default_rng(0))
+    same = dataclasses.replace(paper_plan, waypoints=(paper_plan.waypoints[0],) * 3)
+    with pytest.raises(NavigationError, match="^plan: all its waypoints are at the same place"):
+        simulate(same, SimulationConfig(), np.random.default_rng(0))
