@@ -7,14 +7,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
 import shapely
 from shapely import LinearRing, Polygon
 
-from planner import angles, validation
+from planner import angles, general, validation
 from planner.coverage import cell_area, convex_chains, covered_area
 from planner.headlands import headland_rings, inner_field
 from planner.lines import from_sweep, scan_cell, to_sweep
@@ -25,6 +25,7 @@ from planner.types import (
     DEFAULT_SPEED_MPS,
     DEFAULT_TRACK_WIDTH_M,
     CoveragePlan,
+    Objective,
     PathSegment,
     PlanStats,
     SegmentKind,
@@ -105,7 +106,25 @@ def plan_coverage(
     finish_xy = validation.validate_point(
         finish_lonlat, input_name="finish", frame=frame, field_local=field_local
     )
-    validation.require_convex(field_local)
+    # Convex fields keep the convex planner (one cell, tight budgets); everything else, and a
+    # convex field too narrow for lines inside its headland passes, is decomposed.
+    if not general.is_convex(field_local) or (
+        passes and not general.inner_parts(field_local, passes=passes, interval_m=interval)
+    ):
+        return _plan_general(
+            field_local,
+            frame=frame,
+            field_lonlat=field_lonlat,
+            interval_m=interval,
+            start_xy=start_xy,
+            finish_xy=finish_xy,
+            fixed_heading=fixed_heading,
+            objective=goal,
+            passes=passes,
+            speed_mps=speed,
+            track_width_m=track_width_m,
+            started=started,
+        )
 
     cell = inner_field(field_local, passes=passes, interval_m=interval)
     rings = headland_rings(field_local, passes=passes, interval_m=interval)
@@ -144,6 +163,52 @@ def plan_coverage(
         line_count=len(u),
         coverage_ratio=covered / field_area_local,
         speed_mps=speed,
+        track_width_m=track_width_m,
+        started=started,
+    )
+
+
+def _plan_general(
+    field_local: Polygon,
+    *,
+    frame: LocalFrame,
+    field_lonlat: Polygon,
+    interval_m: float,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+    fixed_heading: float | None,
+    objective: Objective,
+    passes: int,
+    speed_mps: float,
+    track_width_m: float,
+    started: float,
+) -> CoveragePlan:
+    """Plan a non-convex field or one with holes: cells, routed moves (issue 5)."""
+    plan = general.plan_general(
+        field_local,
+        interval_m=interval_m,
+        start_xy=start_xy,
+        finish_xy=finish_xy,
+        fixed_heading_deg=fixed_heading,
+        objective=objective,
+        headland_passes=passes,
+    )
+    built = plan.route
+    route = _Route(
+        x=built.x, y=built.y, roles=built.roles, lines=built.lines, segments=built.segments
+    )
+    if finish_xy is not None:
+        route.add("finish", None, [finish_xy])
+    return _assemble(
+        route,
+        frame=frame,
+        field_lonlat=field_lonlat,
+        cells_local=plan.cells_local,
+        interval_m=interval_m,
+        heading_deg=plan.heading_deg,
+        line_count=plan.line_count,
+        coverage_ratio=plan.coverage_ratio,
+        speed_mps=speed_mps,
         track_width_m=track_width_m,
         started=started,
     )
@@ -189,7 +254,8 @@ def _add_lines(
     first = len(route.x)
     if first:
         route.segments.append(("transit", None, first - 1, first))
-    route.extend(x, y, ["line_start", "line_end"] * n, np.repeat(index, 2).tolist())
+    line_of = cast("list[int | None]", np.repeat(index, 2).tolist())
+    route.extend(x, y, ["line_start", "line_end"] * n, line_of)
     for k in range(n):
         route.segments.append(("line", int(index[k]), first + 2 * k, first + 2 * k + 1))
         if k + 1 < n:
@@ -197,7 +263,7 @@ def _add_lines(
 
 
 def _ring_entry(ring: LinearRing, from_xy: tuple[float, float] | None) -> tuple[float, float]:
-    """The point of ``ring`` nearest ``from_xy`` (its first vertex if None)."""
+    """Return the point of ``ring`` nearest ``from_xy`` (its first vertex if None)."""
     if from_xy is None:
         x0, y0 = ring.coords[0]
         return float(x0), float(y0)

@@ -225,6 +225,18 @@ def test_headland_passes_stay_inside_and_close_the_slanted_ends(passes: int) -> 
     assert roles.index("headland") > max(i for i, r in enumerate(roles) if r == "line_end")
 
 
-def test_non_convex_field_is_refused_for_now(l_field: Polygon) -> None:
-    with pytest.raises(ValueError, match="^field: field is not convex"):
-        plan_coverage(l_field, interval_m=4.0)
+def test_non_convex_field_and_field_with_hole_are_planned_inside(
+    l_field: Polygon, field_with_hole: Polygon
+) -> None:
+    for field in (l_field, field_with_hole):
+        plan = plan_coverage(field, interval_m=4.0)
+        assert_inside(plan)
+        assert_figures_add_up(plan)
+        assert plan.stats.coverage_ratio == pytest.approx(reference_coverage(plan), abs=0.02)
+    # The hut splits the sweep: the plan carries its cells.
+    assert len(plan.cells_lonlat) >= 2
+
+
+def test_convex_field_keeps_one_cell(square_field: Polygon) -> None:
+    plan = plan_coverage(square_field, interval_m=4.0)
+    assert len(plan.cells_lonlat) == 1

@@ -1,0 +1,190 @@
+"""Cell order: in which order to cover the cells, and which of its four variants each uses.
+
+Every cell is covered back and forth in one of four variants (:data:`planner.ordering.VARIANTS`),
+each entering at one line end and leaving at another. The order of the cells and the variant of
+each are chosen together to keep the route short: the start leg, the moves between cells, the
+turns inside each cell and the finish leg. For a given order the best variants follow exactly
+from a Viterbi pass (four states per cell); the order itself is searched exhaustively for a few
+cells and otherwise built greedily from the start and improved by 2-opt and moving single cells.
+Moves are costed as straight lines, or as routed lengths round holes when given.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: Up to this many cells every order is tried.
+EXHAUSTIVE_MAX_CELLS = 6
+#: Up to this many cells the greedy order is improved by local search.
+LOCAL_SEARCH_MAX_CELLS = 60
+#: Local-search rounds at most.
+_MAX_ROUNDS = 8
+#: Local search reverses spans and moves cells over at most this many positions.
+_WINDOW = 6
+
+
+@dataclass(frozen=True, slots=True)
+class CellVariants:
+    """The four variants of each of ``m`` cells.
+
+    Attributes
+    ----------
+    entry_xy, exit_xy : ndarray, shape (m, 4, 2)
+        Where each variant enters its first line and leaves its last, local [m].
+    inner_m : ndarray, shape (m, 4)
+        Length driven inside the cell (turns; lines are the same for every variant) [m].
+    """
+
+    entry_xy: FloatArray
+    exit_xy: FloatArray
+    inner_m: FloatArray
+
+
+def order_cells(
+    cells: CellVariants,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+    *,
+    improve: bool = True,
+    move_m: Callable[[FloatArray, FloatArray], FloatArray] | None = None,
+) -> list[tuple[int, int]]:
+    """Choose the order of the cells and the variant of each.
+
+    Parameters
+    ----------
+    cells : CellVariants
+    start_xy, finish_xy : tuple of float or None
+        Where the tractor comes from and must end, local [m]; None if free.
+    improve : bool
+        Improve the greedy order by local search (beyond :data:`EXHAUSTIVE_MAX_CELLS`).
+    move_m : callable, optional
+        ``move_m(exits, entries)`` gives the length [m] of the move from every point of
+        ``exits`` (k, 2) to every point of ``entries`` (k, 2); straight lines if None.
+
+    Returns
+    -------
+    list of (int, int)
+        ``(cell, variant)`` in driving order, every cell once.
+
+    Examples
+    --------
+    Two one-line cells, the tractor starting beside the second:
+
+    >>> e = np.array([[[0, 0], [0, 10], [0, 0], [0, 10]], [[20, 0], [20, 10], [20, 0], [20, 10]]])
+    >>> x = e[:, [1, 0, 1, 0]]
+    >>> order_cells(CellVariants(e * 1.0, x * 1.0, np.zeros((2, 4))), (20.0, -5.0), None)
+    [(1, 0), (0, 1)]
+    """
+    m = len(cells.inner_m)
+    # move[c, w, c2, w2]: from the exit of (c, w) to the entry of (c2, w2).
+    ex = cells.exit_xy.reshape(m * 4, 2)
+    en = cells.entry_xy.reshape(m * 4, 2)
+    if move_m is None:
+        move = np.hypot(ex[:, None, 0] - en[None, :, 0], ex[:, None, 1] - en[None, :, 1])
+    else:
+        move = move_m(ex, en)
+    first = cells.inner_m.copy()
+    if start_xy is not None:
+        first += np.hypot(*(cells.entry_xy - np.asarray(start_xy)).transpose(2, 0, 1))
+    last = np.zeros((m, 4))
+    if finish_xy is not None:
+        last += np.hypot(*(cells.exit_xy - np.asarray(finish_xy)).transpose(2, 0, 1))
+    problem = _Problem(move.reshape(m, 4, m, 4), first, last, cells.inner_m)
+
+    if m <= EXHAUSTIVE_MAX_CELLS:
+        orders = np.array(list(itertools.permutations(range(m))), dtype=np.int64)
+        costs = np.round(problem.costs(orders), 9)
+        return problem.variants(orders[int(np.argmin(costs))])
+    candidates = np.stack([problem.greedy(), np.arange(m)])  # nearest next; sweep order
+    costs = np.round(problem.costs(candidates), 9)
+    order = candidates[int(np.argmin(costs))]
+    if improve and m <= LOCAL_SEARCH_MAX_CELLS:
+        order = problem.improve(order)
+    return problem.variants(order)
+
+
+class _Problem:
+    """The costs of one ordering problem, and the searches over it."""
+
+    def __init__(
+        self, move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray
+    ) -> None:
+        self.move, self.first, self.last, self.inner = move, first, last, inner
+
+    def costs(self, orders: IntArray) -> FloatArray:
+        """Route length of the best variants for each order, shape (K,), orders (K, m)."""
+        here = self.first[orders[:, 0]]
+        for t in range(1, orders.shape[1]):
+            step = self.move[orders[:, t - 1], :, orders[:, t], :]  # (K, 4, 4)
+            here = (here[:, :, None] + step).min(axis=1) + self.inner[orders[:, t]]
+        return (here + self.last[orders[:, -1]]).min(axis=1)  # type: ignore[no-any-return]
+
+    def variants(self, order: IntArray) -> list[tuple[int, int]]:
+        """Choose the best variant of every cell of ``order`` (Viterbi with back-pointers)."""
+        here = self.first[order[0]]
+        back = []
+        for a, b in itertools.pairwise(order.tolist()):
+            options = here[:, None] + self.move[a, :, b, :]
+            back.append(np.argmin(options, axis=0))
+            here = options.min(axis=0) + self.inner[b]
+        w = int(np.argmin(here + self.last[order[-1]]))
+        chosen = [w]
+        for choice in reversed(back):
+            w = int(choice[w])
+            chosen.append(w)
+        return list(zip(order.tolist(), chosen[::-1], strict=True))
+
+    def greedy(self) -> IntArray:
+        """Nearest cell next, from the cell that begins best (nearest the start, if given)."""
+        m = len(self.inner)
+        current = int(np.argmin(self.first.min(axis=1)))
+        w_here = int(np.argmin(self.first[current]))
+        order = [current]
+        visited = np.zeros(m, dtype=bool)
+        visited[current] = True
+        for _ in range(m - 1):
+            value = self.move[current, w_here] + self.inner
+            value[visited] = np.inf
+            flat = int(np.argmin(value))
+            current, w_here = flat // 4, flat % 4
+            order.append(current)
+            visited[current] = True
+        return np.asarray(order, dtype=np.int64)
+
+    def improve(self, order: IntArray) -> IntArray:
+        """Best 2-opt reversal or single-cell move, repeatedly, while it shortens the route."""
+        n = len(order)
+        i, j = np.triu_indices(n, k=1)
+        near = j - i <= _WINDOW
+        i, j = i[near], j[near]
+        idx = np.broadcast_to(np.arange(n), (len(i), n))
+        # Reversal of order[i..j]: position p takes i + j - p inside the span.
+        inside = (idx >= i[:, None]) & (idx <= j[:, None])
+        reversals = np.where(inside, i[:, None] + j[:, None] - idx, idx)
+        # Moving the cell at position a to position b (a != b).
+        a, b = np.nonzero(~np.eye(n, dtype=bool))
+        near = np.abs(a - b) <= _WINDOW
+        a, b = a[near], b[near]
+        rest = np.arange(n)
+        moves = []
+        for src, dst in zip(a.tolist(), b.tolist(), strict=True):
+            others = np.delete(rest, src)
+            moves.append(np.insert(others, dst, src))
+        neighbourhood = np.vstack([reversals, np.asarray(moves)])
+        best = float(self.costs(order[None])[0])
+        for _ in range(_MAX_ROUNDS):
+            candidates = order[neighbourhood]
+            costs = self.costs(candidates)
+            k = int(np.argmin(costs))
+            if costs[k] >= best - 1e-9:
+                break
+            order, best = candidates[k], float(costs[k])
+        return order

@@ -1,0 +1,226 @@
+"""Shortest moves inside a field, around its holes: a visibility graph over its corners.
+
+A shortest path inside a polygon bends only at *reflex* corners of the free space: reflex
+vertices of the exterior and convex vertices of the holes. The graph joins every pair of such
+corners that see each other and are tangent there (a path only bends round a corner it wraps);
+all-pairs distances come from Dijkstra (``scipy.sparse.csgraph``). The graph is built once per
+field, on the first move that cannot go straight, and serves every later query.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+import shapely
+from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
+from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
+from shapely import Polygon
+
+from planner.errors import PlannerError
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: A move may graze the boundary by this much and still count as inside [m]; R1 allows 1 cm.
+GRAZE_M = 1e-3
+#: Sine below which a corner's neighbour counts as on a line through the corner.
+_COLLINEAR = 1e-9
+
+
+class FieldRouter:
+    """Shortest paths between points of one field, staying inside it and outside its holes.
+
+    Parameters
+    ----------
+    field_local : Polygon
+        The field, local frame [m], holes allowed.
+
+    Examples
+    --------
+    Round the inner corner of an L-shaped field:
+
+    >>> from shapely import Polygon
+    >>> router = FieldRouter(Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)]))
+    >>> router.path((50.0, 20.0), (20.0, 50.0)).tolist()
+    [[50.0, 20.0], [30.0, 30.0], [20.0, 50.0]]
+    """
+
+    def __init__(self, field_local: Polygon) -> None:
+        self.field = shapely.orient_polygons(field_local)
+        self._grown = self.field.buffer(GRAZE_M, join_style="mitre")
+        shapely.prepare(self._grown)
+        self._built = False
+        self.nodes = np.empty((0, 2))
+        self._prev = np.empty((0, 2))
+        self._next = np.empty((0, 2))
+        self._dist = np.empty((0, 0))
+        self._pred = np.empty((0, 0), dtype=np.int64)
+
+    def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
+        """Whether each straight move ``starts[k] → ends[k]`` stays inside the field.
+
+        Parameters
+        ----------
+        starts, ends : ndarray, shape (k, 2)
+            Local [m].
+
+        Returns
+        -------
+        ndarray of bool, shape (k,)
+        """
+        segments = shapely.linestrings(np.stack([starts, ends], axis=1))
+        return np.asarray(shapely.contains_properly(self._grown, segments))
+
+    def path(self, start_xy: tuple[float, float], end_xy: tuple[float, float]) -> FloatArray:
+        """Shortest path from ``start_xy`` to ``end_xy`` inside the field.
+
+        Returns
+        -------
+        ndarray, shape (k, 2)
+            Its vertices, from ``start_xy`` to ``end_xy`` included, local [m].
+
+        Raises
+        ------
+        PlannerError
+            If no path inside the field joins the two points (a point outside the field).
+        """
+        a = np.asarray(start_xy, dtype=float)
+        b = np.asarray(end_xy, dtype=float)
+        if self.inside(a[None], b[None])[0]:
+            return np.stack([a, b])
+        self._build()
+        n = len(self.nodes)
+        if n == 0:
+            return np.stack([a, b])
+        see_a = self._visible_from(a)
+        see_b = self._visible_from(b)
+        ia, ib = np.nonzero(see_a)[0], np.nonzero(see_b)[0]
+        if len(ia) == 0 or len(ib) == 0:
+            raise PlannerError("field", "no path inside the field joins two points of the plan")
+        cost = (
+            np.hypot(*(self.nodes[ia] - a).T)[:, None]
+            + self._dist[np.ix_(ia, ib)]
+            + np.hypot(*(self.nodes[ib] - b).T)[None, :]
+        )
+        flat = int(np.argmin(cost))
+        if not np.isfinite(cost.flat[flat]):
+            raise PlannerError("field", "no path inside the field joins two points of the plan")
+        i, j = int(ia[flat // len(ib)]), int(ib[flat % len(ib)])
+        chain = [j]
+        while chain[-1] != i:
+            chain.append(int(self._pred[i, chain[-1]]))
+        return np.vstack([a, self.nodes[chain[::-1]], b])
+
+    def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
+        """Return the shortest-path lengths inside the field from every start to every end.
+
+        Parameters
+        ----------
+        starts : ndarray, shape (p, 2)
+        ends : ndarray, shape (q, 2)
+            Local [m].
+
+        Returns
+        -------
+        ndarray, shape (p, q)
+            Lengths [m]; ``inf`` where no path joins the points.
+
+        Examples
+        --------
+        >>> from shapely import Polygon
+        >>> router = FieldRouter(Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)]))
+        >>> router.distances(np.array([[50.0, 20.0]]), np.array([[20.0, 50.0], [40.0, 10.0]]))
+        array([[44.72135955, 14.14213562]])
+        """
+        p, q = len(starts), len(ends)
+        a = np.repeat(starts, q, axis=0)
+        b = np.tile(ends, (p, 1))
+        straight: FloatArray = np.hypot(*(a - b).T).reshape(p, q)
+        seen = self.inside(a, b).reshape(p, q)
+        if seen.all():
+            return straight
+        self._build()
+        n = len(self.nodes)
+        if n == 0:
+            unreachable: FloatArray = np.where(seen, straight, np.inf)
+            return unreachable
+        node_seen_a = self.inside(np.repeat(starts, n, axis=0), np.tile(self.nodes, (p, 1)))
+        node_seen_b = self.inside(np.repeat(ends, n, axis=0), np.tile(self.nodes, (q, 1)))
+        to_node = np.hypot(*(np.repeat(starts, n, axis=0) - np.tile(self.nodes, (p, 1))).T)
+        from_node = np.hypot(*(np.repeat(ends, n, axis=0) - np.tile(self.nodes, (q, 1))).T)
+        leg_a = np.where(node_seen_a, to_node, np.inf).reshape(p, n)
+        leg_b = np.where(node_seen_b, from_node, np.inf).reshape(q, n)
+        # Min-plus products: start → node i → (graph) → node j → end.
+        via = (leg_a[:, :, None] + self._dist[None, :, :]).min(axis=1)  # (p, n)
+        around = (via[:, None, :] + leg_b[None, :, :]).min(axis=2)  # (p, q)
+        lengths: FloatArray = np.where(seen, straight, around)
+        return lengths
+
+    def _visible_from(self, p: FloatArray) -> npt.NDArray[np.bool_]:
+        # No tangency filter here: a query point on the boundary, a hair off an edge, would
+        # fail it against that edge's own corner.
+        return self.inside(np.repeat(p[None], len(self.nodes), axis=0), self.nodes)
+
+    def _build(self) -> None:
+        if self._built:
+            return
+        self._built = True
+        nodes, prev, nxt = [], [], []
+        for ring in (self.field.exterior, *self.field.interiors):
+            xy = np.asarray(ring.coords)[:-1]
+            before, after = np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0)
+            cross = _cross(xy - before, after - xy)
+            # Exterior counter-clockwise, holes clockwise: free space turns right at its
+            # reflex corners.
+            reflex = cross < 0.0
+            nodes.append(xy[reflex])
+            prev.append(before[reflex])
+            nxt.append(after[reflex])
+        self.nodes = np.concatenate(nodes)
+        self._prev = np.concatenate(prev)
+        self._next = np.concatenate(nxt)
+        n = len(self.nodes)
+        if n == 0:
+            return
+        i, j = np.triu_indices(n, k=1)
+        a, b = self.nodes[i], self.nodes[j]
+        ok = _tangent(b, a, self._prev[i], self._next[i]) & _tangent(
+            a, b, self._prev[j], self._next[j]
+        )
+        i, j = i[ok], j[ok]
+        if len(i):
+            seen = self.inside(self.nodes[i], self.nodes[j])
+            i, j = i[seen], j[seen]
+        length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
+        graph = csr_matrix((length, (i, j)), shape=(n, n))
+        dist, pred = shortest_path(graph, method="D", directed=False, return_predecessors=True)
+        self._dist = dist
+        self._pred = pred.astype(np.int64)
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _tangent(
+    p: FloatArray, corner: FloatArray, before: FloatArray, after: FloatArray
+) -> npt.NDArray[np.bool_]:
+    """Whether the line from ``p`` through ``corner`` has both ring neighbours on one side.
+
+    A shortest path only passes a corner it wraps round, so other corners need no edge.
+    """
+    direction = corner - p
+    to_before, to_after = before - corner, after - corner
+    reach = np.hypot(direction[..., 0], direction[..., 1])
+    # Sines of the angles; a neighbour within 1e-9 rad of the line counts as on it.
+    s1 = _cross(direction, to_before) / (reach * np.hypot(to_before[..., 0], to_before[..., 1]))
+    s2 = _cross(direction, to_after) / (reach * np.hypot(to_after[..., 0], to_after[..., 1]))
+    s1 = np.where(np.abs(s1) < _COLLINEAR, 0.0, s1)
+    s2 = np.where(np.abs(s2) < _COLLINEAR, 0.0, s2)
+    with np.errstate(invalid="ignore"):
+        return np.asarray((s1 * s2 >= 0.0) | (reach == 0.0))
+
+
+def path_length(points: FloatArray) -> float:
+    """Length of a polyline [m]."""
+    return float(np.hypot(*np.diff(points, axis=0).T).sum())

@@ -1,0 +1,48 @@
+"""Random simple non-convex polygons with holes, in local metres, for property tests."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from hypothesis import strategies as st
+from shapely import Polygon
+
+
+@st.composite
+def fields_with_holes(
+    draw: st.DrawFn, *, min_vertices: int = 3, max_vertices: int = 40, max_holes: int = 3
+) -> Polygon:
+    """A star-shaped (so simple), usually non-convex polygon of 0.2–20 ha with 0–3 holes."""
+    n = draw(st.integers(min_vertices, max_vertices))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    size_m = 10 ** draw(st.floats(math.log10(50.0), math.log10(500.0)))
+    angles = np.sort(rng.uniform(0.0, 2.0 * math.pi, n))
+    # Spread the angles so no two vertices coincide and the star stays simple.
+    angles = np.unique(np.round(angles, 6))
+    if len(angles) < 3:
+        angles = np.array([0.0, 2.1, 4.2])
+    radii = size_m * rng.uniform(0.35, 1.0, len(angles))
+    exterior = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
+    field = shapely.orient_polygons(Polygon(exterior))
+    if not field.is_valid or field.area < 1.0:
+        field = shapely.box(-size_m, -size_m / 2, size_m, size_m / 2)
+    holes: list[Polygon] = []
+    for _ in range(draw(st.integers(0, max_holes))):
+        k = int(rng.integers(3, 8))
+        r = size_m * rng.uniform(0.04, 0.15)
+        a = np.sort(rng.uniform(0.0, 2.0 * math.pi, k))
+        centre = rng.uniform(-size_m * 0.5, size_m * 0.5, 2)
+        hole = Polygon(centre + np.stack([r * np.cos(a), r * np.sin(a)], axis=1))
+        if not hole.is_valid or hole.area < 1.0:
+            continue
+        room = field.buffer(-1.0)
+        if room.contains(hole) and all(hole.distance(h) > 1.0 for h in holes):
+            holes.append(hole)
+    if holes:
+        field = Polygon(field.exterior, [h.exterior for h in holes])
+    field = shapely.orient_polygons(field)
+    assert field.is_valid
+    return field  # type: ignore[no-any-return]
