@@ -42,9 +42,15 @@ def run() -> str:
     paper_ms = summary_ms(time_calls(paper, repeat=500))
     big_ms = summary_ms(time_calls(lambda: plan_coverage(big, interval_m=1.0), repeat=60))
     rows = [
-        ("Paper field (4 m, start + finish), projection and GeoJSON included", paper_ms, 2.0, "4 lines"),
         (
-            f"100 ha convex field at 1 m, heading searched ({big_plan.stats.area_m2 / 10_000:.1f} ha)",
+            "Paper field (4 m, start + finish), projection and GeoJSON included",
+            paper_ms,
+            2.0,
+            "4 lines",
+        ),
+        (
+            "100 ha convex field at 1 m, heading searched "
+            f"({big_plan.stats.area_m2 / 10_000:.1f} ha)",
             big_ms,
             25.0,
             f"{big_plan.stats.line_count} lines",

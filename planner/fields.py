@@ -186,7 +186,7 @@ def _properties(feature: Mapping[str, Any]) -> Mapping[str, Any]:
 
 
 def _interval_property(props: Mapping[str, Any]) -> float | None:
-    value = props.get("interval_m")
+    value: Any = props.get("interval_m")
     return float(value) if _is_number(value) else None
 
 

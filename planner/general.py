@@ -25,8 +25,9 @@ from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS, CellVariants, order_cells
 from planner.coverage import Chains, convex_chains, covered_area
 from planner.decomposition import decompose_sweep
-from planner.errors import InvalidParameterError, PlanTooLargeError
+from planner.errors import PlanTooLargeError
 from planner.heading_search import score_headings
+from planner.headlands import headland_ring_sets, inner_parts
 from planner.lines import LineScan, from_sweep, line_counts
 from planner.ordering import ordered_line_ends, variant_ends, variant_lengths
 from planner.routing import FieldRouter
@@ -250,8 +251,12 @@ def plan_general(
                 cell.chains, best.scan.u[k], best.scan.v_lo[k], best.scan.v_hi[k], d
             )
     for pass_index in reversed(range(len(rings))):
-        for ring in _ring_order(rings[pass_index], route.here()):
-            _add_headland(route, ring, pass_index, router)
+        ordered = _ring_order(rings[pass_index], route.here())
+        for ring_index, ring in enumerate(ordered):
+            # The last round goes on to the point nearest the finish, so the tractor leaves
+            # from the headland instead of crossing the tilled field.
+            last = pass_index == 0 and ring_index == len(ordered) - 1
+            _add_headland(route, ring, pass_index, router, end_near=finish_xy if last else None)
 
     field_area = float(field_local.area)
     covered = lines_covered
@@ -293,58 +298,6 @@ def is_convex(field_local: Polygon) -> bool:
         return False
     depth_m = shapely.hausdorff_distance(field_local.exterior, hull.exterior)
     return bool(depth_m <= CONVEXITY_TOLERANCE_M)
-
-
-def inner_parts(field_local: Polygon, *, passes: int, interval_m: float) -> list[Polygon]:
-    """Return the area left for tillage lines inside ``passes`` headland rounds.
-
-    A narrow neck can split it into several parts; they come oriented (exterior
-    counter-clockwise), largest first.
-    """
-    if passes == 0:
-        inner = field_local
-    else:
-        inner = field_local.buffer(-passes * interval_m, join_style="mitre")
-    parts = [
-        shapely.orient_polygons(p)
-        for p in shapely.get_parts(inner)
-        if isinstance(p, Polygon) and p.area > _SLIVER_M2
-    ]
-    parts.sort(key=lambda p: (-p.area, p.bounds))
-    return parts
-
-
-def headland_ring_sets(
-    field_local: Polygon, *, passes: int, interval_m: float
-) -> list[list[LinearRing]]:
-    """Centre lines of the headland passes, outermost pass first: each pass's rings.
-
-    Pass ``i`` runs ``(i + 1/2) · interval_m`` inside the boundary, around the exterior and
-    around every hole (grown by the same distance), so its footprint fills the band from
-    ``i · interval_m`` to ``(i + 1) · interval_m``.
-
-    Raises
-    ------
-    InvalidParameterError
-        If the field is too narrow for that many passes (the area inside them may be empty:
-        then the plan is the passes alone).
-    """
-    sets: list[list[LinearRing]] = []
-    for i in range(passes):
-        offset = field_local.buffer(-(i + 0.5) * interval_m, join_style="mitre")
-        rings = [
-            ring
-            for p in shapely.get_parts(offset)
-            if isinstance(p, Polygon) and p.area > _SLIVER_M2
-            for ring in (p.exterior, *p.interiors)
-        ]
-        if not rings:
-            raise InvalidParameterError(
-                "headland_passes",
-                f"the field is too narrow for {passes} headland pass(es) at {interval_m:g} m",
-            )
-        sets.append(rings)
-    return sets
 
 
 def _better(candidate: _Candidate, best: _Candidate, objective: Objective) -> bool:
@@ -718,18 +671,41 @@ def _ring_entry(ring: LinearRing, from_xy: tuple[float, float] | None) -> tuple[
 
 
 def _add_headland(
-    route: RouteBuilder, ring: LinearRing, pass_index: int, router: FieldRouter
+    route: RouteBuilder,
+    ring: LinearRing,
+    pass_index: int,
+    router: FieldRouter,
+    *,
+    end_near: tuple[float, float] | None = None,
 ) -> None:
-    """Drive ``ring`` once round, entering where it is nearest the tractor."""
+    """Drive ``ring`` once round, entering where it is nearest the tractor.
+
+    With ``end_near``, the round goes on along the ring to its point nearest ``end_near``.
+    """
     here = route.here()
     entry = _ring_entry(ring, here)
     coords = np.asarray(ring.coords)[:-1]
     distance_along = shapely.line_locate_point(ring, shapely.points(coords))
     at = float(ring.project(shapely.Point(entry)))
-    order = np.argsort((distance_along - at) % ring.length, kind="stable")
-    loop = np.asarray(
-        [entry, *[tuple(c) for c in coords[order] if np.hypot(*(c - entry)) > 1e-9], entry]
-    )
+    ahead = np.asarray((distance_along - at) % ring.length, dtype=float)
+    order = np.argsort(ahead, kind="stable")
+    points: list[tuple[float, float]] = [
+        entry,
+        *[(float(c[0]), float(c[1])) for c in coords[order] if np.hypot(*(c - entry)) > 1e-9],
+        entry,
+    ]
+    if end_near is not None:
+        exit_at = float(ring.project(shapely.Point(end_near)))
+        further = (exit_at - at) % ring.length
+        exit_point = ring.interpolate(exit_at)
+        points += [
+            (float(coords[i, 0]), float(coords[i, 1]))
+            for i in order
+            if 1e-9 < ahead[i] < further - 1e-9
+        ]
+        if further > 1e-9:
+            points.append((float(exit_point.x), float(exit_point.y)))
+    loop = np.asarray(points)
     if here is not None:
         if route.roles[-1] == "start":
             route.append("transit", None, np.asarray([here, entry]), "headland")

@@ -1,52 +1,68 @@
 """Headland passes: rounds parallel to the boundary, for turning room and the edges lines miss.
 
-Pass ``i`` (from 0, outermost) runs ``(i + 1/2) · interval`` inside the boundary, so its
-footprint fills the band from ``i · interval`` to ``(i + 1) · interval``; the tillage lines
-then cover what lies inside the last band.
+Pass ``i`` (from 0, outermost) runs ``(i + 1/2) · interval`` inside the boundary and around
+every hole, so its footprint fills the band from ``i · interval`` to ``(i + 1) · interval``;
+the tillage lines then cover what lies inside the last band.
 """
 
 from __future__ import annotations
 
+import shapely
 from shapely import LinearRing, Polygon
 
 from planner.errors import InvalidParameterError
 
+#: Inner-area parts smaller than this are dropped (slivers between headland passes) [m²].
+_SLIVER_M2 = 1e-6
 
-def inner_field(field_local: Polygon, *, passes: int, interval_m: float) -> Polygon:
-    """Return the part of ``field_local`` left for tillage lines inside ``passes`` rounds.
+
+def inner_parts(field_local: Polygon, *, passes: int, interval_m: float) -> list[Polygon]:
+    """Return the area left for tillage lines inside ``passes`` headland rounds.
+
+    A narrow neck can split it into several parts; they come oriented (exterior
+    counter-clockwise), largest first.
+    """
+    if passes == 0:
+        inner = field_local
+    else:
+        inner = field_local.buffer(-passes * interval_m, join_style="mitre")
+    parts = [
+        shapely.orient_polygons(p)
+        for p in shapely.get_parts(inner)
+        if isinstance(p, Polygon) and p.area > _SLIVER_M2
+    ]
+    parts.sort(key=lambda p: (-p.area, p.bounds))
+    return parts
+
+
+def headland_ring_sets(
+    field_local: Polygon, *, passes: int, interval_m: float
+) -> list[list[LinearRing]]:
+    """Centre lines of the headland passes, outermost pass first: each pass's rings.
+
+    Pass ``i`` runs ``(i + 1/2) · interval_m`` inside the boundary, around the exterior and
+    around every hole (grown by the same distance), so its footprint fills the band from
+    ``i · interval_m`` to ``(i + 1) · interval_m``.
 
     Raises
     ------
     InvalidParameterError
-        If the field is too narrow for that many passes.
-
-    Examples
-    --------
-    >>> from shapely import box
-    >>> inner_field(box(0, 0, 40, 20), passes=2, interval_m=4.0).bounds
-    (8.0, 8.0, 32.0, 12.0)
+        If the field is too narrow for that many passes (the area inside them may be empty:
+        then the plan is the passes alone).
     """
-    if passes == 0:
-        return field_local
-    inner = field_local.buffer(-passes * interval_m, join_style="mitre")
-    if not isinstance(inner, Polygon) or inner.is_empty:
-        raise InvalidParameterError(
-            "headland_passes",
-            f"the field is too narrow for {passes} headland pass(es) at {interval_m:g} m",
-        )
-    return inner
-
-
-def headland_rings(field_local: Polygon, *, passes: int, interval_m: float) -> list[LinearRing]:
-    """Return the centre lines of the headland passes, outermost first, counter-clockwise."""
-    rings: list[LinearRing] = []
+    sets: list[list[LinearRing]] = []
     for i in range(passes):
         offset = field_local.buffer(-(i + 0.5) * interval_m, join_style="mitre")
-        if not isinstance(offset, Polygon) or offset.is_empty:
+        rings = [
+            ring
+            for p in shapely.get_parts(offset)
+            if isinstance(p, Polygon) and p.area > _SLIVER_M2
+            for ring in (p.exterior, *p.interiors)
+        ]
+        if not rings:
             raise InvalidParameterError(
                 "headland_passes",
                 f"the field is too narrow for {passes} headland pass(es) at {interval_m:g} m",
             )
-        ring = offset.exterior
-        rings.append(ring if ring.is_ccw else LinearRing(list(ring.coords)[::-1]))
-    return rings
+        sets.append(rings)
+    return sets

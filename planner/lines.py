@@ -57,7 +57,7 @@ def from_sweep(
 
 
 def line_counts(width_m: FloatArray, interval_m: float) -> IntArray:
-    """Number of lines that cover a width [m] at ``interval_m`` (R2, R3).
+    """Count the lines that cover a width [m] at ``interval_m`` (R2, R3).
 
     Examples
     --------

@@ -105,7 +105,7 @@ def aggregate_scan(scan: LineScan) -> HeadingAggregates:
     n_headings = len(scan.headings_deg)
     heading = scan.heading_of_line()
     counts = scan.counts
-    working = np.bincount(heading, scan.v_hi - scan.v_lo, minlength=n_headings)
+    working = np.bincount(heading, scan.v_hi - scan.v_lo, minlength=n_headings).astype(float)
     k = np.arange(len(scan.u)) - scan.offsets[heading]
     here = np.nonzero(k < counts[heading] - 1)[0]
     du = scan.u[here + 1] - scan.u[here]
@@ -118,10 +118,10 @@ def aggregate_scan(scan: LineScan) -> HeadingAggregates:
         headings_deg=scan.headings_deg,
         counts=counts,
         working=working,
-        top_even=np.bincount(h, top * even, minlength=n_headings),
-        top_odd=np.bincount(h, top * ~even, minlength=n_headings),
-        bottom_even=np.bincount(h, bottom * even, minlength=n_headings),
-        bottom_odd=np.bincount(h, bottom * ~even, minlength=n_headings),
+        top_even=np.bincount(h, top * even, minlength=n_headings).astype(float),
+        top_odd=np.bincount(h, top * ~even, minlength=n_headings).astype(float),
+        bottom_even=np.bincount(h, bottom * even, minlength=n_headings).astype(float),
+        bottom_odd=np.bincount(h, bottom * ~even, minlength=n_headings).astype(float),
         u_first=scan.u[first],
         lo_first=scan.v_lo[first],
         hi_first=scan.v_hi[first],
@@ -191,7 +191,7 @@ def score_headings(
     c = k2 - k1
 
     def per_group(values: FloatArray) -> FloatArray:
-        return np.bincount(group, values, minlength=2 * n_headings)
+        return np.bincount(group, values, minlength=2 * n_headings).astype(float)
 
     total = per_group(c * intercept + slope * (c * pa + d * c * (k1 + k2 - 1) / 2.0))
     # Turns between two lines of the same edge are all d·√(1 + slope²) long.

@@ -12,11 +12,10 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 import shapely
-from shapely import LinearRing, Polygon
+from shapely import Polygon
 
 from planner import angles, general, validation
-from planner.coverage import cell_area, convex_chains, covered_area
-from planner.headlands import headland_rings, inner_field
+from planner.coverage import convex_chains, covered_area
 from planner.lines import from_sweep, scan_cell, to_sweep
 from planner.ordering import ordered_line_ends, score_headings
 from planner.projection import LocalFrame, field_frame, geodesic_area_m2
@@ -106,11 +105,9 @@ def plan_coverage(
     finish_xy = validation.validate_point(
         finish_lonlat, input_name="finish", frame=frame, field_local=field_local
     )
-    # Convex fields keep the convex planner (one cell, tight budgets); everything else, and a
-    # convex field too narrow for lines inside its headland passes, is decomposed.
-    if not general.is_convex(field_local) or (
-        passes and not general.inner_parts(field_local, passes=passes, interval_m=interval)
-    ):
+    # A convex field without holes or headland passes is one cell at every heading: the
+    # closed-form planner takes it (tight budgets). Everything else is decomposed.
+    if passes or not general.is_convex(field_local):
         return _plan_general(
             field_local,
             frame=frame,
@@ -126,14 +123,9 @@ def plan_coverage(
             started=started,
         )
 
-    cell = inner_field(field_local, passes=passes, interval_m=interval)
-    rings = headland_rings(field_local, passes=passes, interval_m=interval)
-    ring_xy = np.asarray(shapely.orient_polygons(cell).exterior.coords)[:-1]
-
+    ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
     headings = angles.candidate_headings(ring_xy, fixed_heading)
-    # Lines end at the cell; with headland passes the route goes on from the last line.
-    after_lines = _ring_entry(rings[-1], None) if rings else finish_xy
-    lengths, counts = score_headings(ring_xy, headings, interval, start_xy, after_lines)
+    lengths, counts = score_headings(ring_xy, headings, interval, start_xy, finish_xy)
     best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
     heading = float(headings[best])
     scan = scan_cell(ring_xy, headings[best : best + 1], interval)
@@ -142,8 +134,6 @@ def plan_coverage(
     if start_xy is not None:
         route.add("start", None, [start_xy])
     _add_lines(route, heading, u, v_lo, v_hi, variant)
-    for pass_index, ring in reversed(list(enumerate(rings))):
-        _add_headland(route, ring, pass_index)
     if finish_xy is not None:
         route.add("finish", None, [finish_xy])
 
@@ -151,13 +141,11 @@ def plan_coverage(
     chains = convex_chains(u_ring, v_ring)
     field_area_local = float(field_local.area)
     covered = covered_area(chains, u, v_lo, v_hi, interval)
-    if passes:
-        covered += field_area_local - cell_area(chains)  # the bands the passes fill
     return _assemble(
         route,
         frame=frame,
         field_lonlat=field_lonlat,
-        cells_local=[cell],
+        cells_local=[field_local],
         interval_m=interval,
         heading_deg=heading,
         line_count=len(u),
@@ -260,31 +248,6 @@ def _add_lines(
         route.segments.append(("line", int(index[k]), first + 2 * k, first + 2 * k + 1))
         if k + 1 < n:
             route.segments.append(("turn", None, first + 2 * k + 1, first + 2 * k + 2))
-
-
-def _ring_entry(ring: LinearRing, from_xy: tuple[float, float] | None) -> tuple[float, float]:
-    """Return the point of ``ring`` nearest ``from_xy`` (its first vertex if None)."""
-    if from_xy is None:
-        x0, y0 = ring.coords[0]
-        return float(x0), float(y0)
-    point = ring.interpolate(ring.project(shapely.Point(from_xy)))
-    return float(point.x), float(point.y)
-
-
-def _add_headland(route: _Route, ring: LinearRing, pass_index: int) -> None:
-    """Drive ``ring`` once round, entering where it is nearest the tractor."""
-    here = (route.x[-1], route.y[-1]) if route.x else None
-    entry = _ring_entry(ring, here)
-    coords = np.asarray(ring.coords)[:-1]
-    distance_along = shapely.line_locate_point(ring, shapely.points(coords))
-    at = float(ring.project(shapely.Point(entry)))
-    order = np.argsort((distance_along - at) % ring.length, kind="stable")
-    loop = [entry, *[tuple(c) for c in coords[order] if np.hypot(*(c - entry)) > 1e-9], entry]
-    first = len(route.x)
-    if first:
-        route.segments.append(("turn", None, first - 1, first))
-    route.add("headland", None, loop)
-    route.segments.append(("headland", pass_index, first, len(route.x) - 1))
 
 
 def _assemble(

@@ -111,19 +111,27 @@ class LocalFrame:
         y = np.asarray(y, dtype=float)
         de = x * self.cos_g + y * self.sin_g
         dn = -x * self.sin_g + y * self.cos_g
-        lon, lat = inverse.transform(de * self.scale + self.origin_e, dn * self.scale + self.origin_n)
+        lon, lat = inverse.transform(
+            de * self.scale + self.origin_e, dn * self.scale + self.origin_n
+        )
         return np.asarray(lon, dtype=float), np.asarray(lat, dtype=float)
+
+    # shapely's stubs know only the interleaved form of transform's callback.
 
     def to_local(self, geometry_lonlat: GeometryT) -> GeometryT:
         """Return ``geometry_lonlat`` (WGS84) in this local frame [m]."""
-        return shapely.transform(  # type: ignore[no-any-return]
-            geometry_lonlat, lambda x, y: self.to_local_xy(x, y), interleaved=False
+        return shapely.transform(
+            geometry_lonlat,
+            self.to_local_xy,  # type: ignore[arg-type]
+            interleaved=False,
         )
 
     def to_lonlat(self, geometry_local: GeometryT) -> GeometryT:
         """Return ``geometry_local`` [m] in WGS84 ``(lon, lat)``."""
-        return shapely.transform(  # type: ignore[no-any-return]
-            geometry_local, lambda x, y: self.to_lonlat_xy(x, y), interleaved=False
+        return shapely.transform(
+            geometry_local,
+            self.to_lonlat_xy,  # type: ignore[arg-type]
+            interleaved=False,
         )
 
 

@@ -13,9 +13,7 @@ import numpy.typing as npt
 FloatArray = npt.NDArray[np.float64]
 
 
-def pivot_time_s(
-    x: FloatArray, y: FloatArray, *, speed_mps: float, track_width_m: float
-) -> float:
+def pivot_time_s(x: FloatArray, y: FloatArray, *, speed_mps: float, track_width_m: float) -> float:
     """Time spent pivoting along a polyline [s].
 
     Pulling one clutch stops that wheel; the other drives round it at ``speed_mps``, so the

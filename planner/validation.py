@@ -27,8 +27,6 @@ MAX_POINT_DISTANCE_M = 5_000.0
 #: Real field boundaries have a few hundred vertices (310 at most in shared/fields); a limit
 #: keeps a pasted GPS log or a mistaken file from costing seconds and gigabytes.
 MAX_VERTICES = 2_000
-#: A vertex within this distance of the convex hull does not make a field non-convex [m].
-CONVEXITY_TOLERANCE_M = 1e-3
 
 _WHERE = re.compile(r"\[\s*(-?[\d.eE+-]+)\s+(-?[\d.eE+-]+)\s*\]")
 
@@ -97,7 +95,7 @@ def validate_field(field_lonlat: Any) -> Polygon:
             f"area is {area_m2 / 10_000:,.0f} ha; tillpath plans fields up to 2,000 ha at once",
         )
     # A canonical vertex order (normalize) and orientation keep plans deterministic (R7).
-    return shapely.orient_polygons(shapely.normalize(field_lonlat))  # type: ignore[no-any-return]
+    return shapely.orient_polygons(shapely.normalize(field_lonlat))
 
 
 def _describe_invalid(reason: str) -> str:
@@ -114,30 +112,6 @@ def _describe_invalid(reason: str) -> str:
     if "Too few points" in reason:
         return f"a ring has too few distinct points{where}"
     return f"polygon is not valid: {reason}"
-
-
-def require_convex(field_local: Polygon) -> None:
-    """Refuse a field the convex-only planner cannot plan.
-
-    Raises
-    ------
-    InvalidFieldError
-        If ``field_local`` has holes, or a vertex lies more than 1 mm inside its convex hull.
-    """
-    if field_local.interiors:
-        raise InvalidFieldError(
-            "field",
-            f"field has {len(field_local.interiors)} hole(s); obstacles inside a field are "
-            "not supported yet",
-        )
-    hull = field_local.convex_hull
-    depth_m = shapely.hausdorff_distance(field_local.exterior, hull.exterior)
-    if depth_m > CONVEXITY_TOLERANCE_M:
-        raise InvalidFieldError(
-            "field",
-            f"field is not convex: its boundary bends inwards by {depth_m:.2f} m; "
-            "only convex fields are supported yet",
-        )
 
 
 def validate_interval(interval_m: Any) -> float:

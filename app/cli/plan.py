@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from enum import Enum
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -12,7 +12,7 @@ import typer
 from app.cli.common import fail, read_json_file, write_output
 
 
-class OutputFormat(str, Enum):
+class OutputFormat(StrEnum):
     """Formats ``tillpath plan`` writes."""
 
     geojson = "geojson"
@@ -21,7 +21,7 @@ class OutputFormat(str, Enum):
     json = "json"
 
 
-class ObjectiveChoice(str, Enum):
+class ObjectiveChoice(StrEnum):
     """What the heading and order search minimises."""
 
     shortest_path = "shortest_path"

@@ -82,10 +82,14 @@ def plan_from_geojson(obj: Any) -> CoveragePlan:
         lon, lat = feature["geometry"]["coordinates"][:2]
         role = props.get("role")
         if role not in _ROLES:
-            raise InvalidFieldError("plan", f"waypoint {props.get('seq')} has unknown role {role!r}")
+            raise InvalidFieldError(
+                "plan", f"waypoint {props.get('seq')} has unknown role {role!r}"
+            )
         line = props.get("line")
         waypoints.append(
-            Waypoint(int(props["seq"]), float(lon), float(lat), role, None if line is None else int(line))
+            Waypoint(
+                int(props["seq"]), float(lon), float(lat), role, None if line is None else int(line)
+            )
         )
     segments = []
     for feature in obj["features"]:

@@ -35,9 +35,7 @@ class GpxTrack:
     time: Sequence[dt.datetime] | None = None
 
 
-def plan_to_gpx(
-    plan: CoveragePlan | None, *, name: str, tracks: Sequence[GpxTrack] = ()
-) -> str:
+def plan_to_gpx(plan: CoveragePlan | None, *, name: str, tracks: Sequence[GpxTrack] = ()) -> str:
     """Return GPX 1.1 text with the plan as a route and any ``tracks``.
 
     Parameters

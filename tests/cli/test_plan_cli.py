@@ -49,8 +49,16 @@ def test_plan_to_stdout_in_each_format(fmt: str) -> None:
 
 def test_flags_override_the_file(tmp_path: Path) -> None:
     result = run(
-        "plan", str(PAPER_FIELD), "--format", "json", "--angle", "90",
-        "--start", "115.2981,-8.6266", "--objective", "fewest_lines",
+        "plan",
+        str(PAPER_FIELD),
+        "--format",
+        "json",
+        "--angle",
+        "90",
+        "--start",
+        "115.2981,-8.6266",
+        "--objective",
+        "fewest_lines",
     )
     assert result.returncode == 0, result.stderr
     first = json.loads(result.stdout)["waypoints"][0]
@@ -83,7 +91,11 @@ def test_bad_files_exit_2(tmp_path: Path) -> None:
     broken = tmp_path / "broken.geojson"
     broken.write_text('{"type": "Polygon", ')
     result = run("plan", str(broken))
-    assert result.returncode == 2 and "error: FIELD: " in result.stderr and "not valid JSON" in result.stderr
+    assert (
+        result.returncode == 2
+        and "error: FIELD: " in result.stderr
+        and "not valid JSON" in result.stderr
+    )
     no_interval = tmp_path / "bare.geojson"
     field = json.loads(PAPER_FIELD.read_text())["features"][0]["geometry"]
     no_interval.write_text(json.dumps(field))

@@ -88,7 +88,13 @@ def test_csv_reads_back(plan_name: str, request: pytest.FixtureRequest) -> None:
     rows = list(csv.DictReader(io.StringIO(plan_to_csv(plan))))
     assert list(rows[0]) == ["seq", "lat", "lon", "role", "line"]
     parsed = [
-        (int(r["seq"]), float(r["lat"]), float(r["lon"]), r["role"], int(r["line"]) if r["line"] else None)
+        (
+            int(r["seq"]),
+            float(r["lat"]),
+            float(r["lon"]),
+            r["role"],
+            int(r["line"]) if r["line"] else None,
+        )
         for r in rows
     ]
     assert parsed == waypoint_rows(plan)
@@ -153,7 +159,10 @@ def test_field_parsing_accepts_the_shapes_people_send(square_field: Polygon) -> 
         polygon,
         {"type": "Feature", "properties": {"interval_m": 3}, "geometry": polygon},
         {"type": "MultiPolygon", "coordinates": [[ring]]},
-        {"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {}, "geometry": polygon}]},
+        {
+            "type": "FeatureCollection",
+            "features": [{"type": "Feature", "properties": {}, "geometry": polygon}],
+        },
     ):
         assert parse_field_geojson(obj).field_lonlat.equals(square_field)
 
@@ -165,7 +174,10 @@ def test_field_parsing_accepts_the_shapes_people_send(square_field: Polygon) -> 
         ({"type": "Point", "coordinates": [1, 2]}, "must be a Polygon, not 'Point'"),
         ({"type": "Polygon", "coordinates": []}, "polygon has no coordinates"),
         ({"type": "Polygon", "coordinates": [[[1, 2], [3, 4]]]}, "at least 3 distinct vertices"),
-        ({"type": "Polygon", "coordinates": [[[1, 2], ["a", 4], [3, 4], [1, 2]]]}, "not \\[lon, lat\\]"),
+        (
+            {"type": "Polygon", "coordinates": [[[1, 2], ["a", 4], [3, 4], [1, 2]]]},
+            "not \\[lon, lat\\]",
+        ),
         ({"type": "FeatureCollection", "features": []}, "holds no Polygon"),
         ({"type": "MultiPolygon", "coordinates": [[], []]}, "exactly one polygon"),
     ],

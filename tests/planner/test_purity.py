@@ -10,7 +10,9 @@ FORBIDDEN_MODULES = {"app", "navigation", "fastapi", "sqlalchemy", "starlette", 
 FORBIDDEN_CALLS = {"open", "print", "input"}
 
 
-@pytest.mark.parametrize("path", sorted(PLANNER.rglob("*.py")), ids=lambda p: str(p.relative_to(PLANNER)))
+@pytest.mark.parametrize(
+    "path", sorted(PLANNER.rglob("*.py")), ids=lambda p: str(p.relative_to(PLANNER))
+)
 def test_planner_module_does_no_io(path: Path) -> None:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     for node in ast.walk(tree):
