@@ -2,8 +2,8 @@
 
 The stages: headland passes (around the exterior and every hole) leave an inner area; the
 best few headings by :mod:`planner.heading_search` are decomposed into cells
-(:mod:`planner.decomposition`); each cell gets its lines (:func:`scan_cells`, placed as
-:func:`planner.lines.scan_cell` places them: R2 and R3 per cell) and its four variants
+(:mod:`planner.decomposition`); each cell gets its lines (:func:`planner.lines.scan_cells`:
+R2 and R3 per cell) and its four variants
 (:mod:`planner.ordering`); and the cells are ordered (:mod:`planner.cell_order`). The winning
 heading's route is then built: turns that would cut a corner follow the boundary, and every
 move between cells, and to and between headland passes, is routed inside the field around the
@@ -28,7 +28,7 @@ from planner.decomposition import decompose_sweep
 from planner.errors import PlanTooLargeError
 from planner.heading_search import score_headings
 from planner.headlands import headland_ring_sets, inner_parts
-from planner.lines import LineScan, from_sweep, line_counts
+from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import ordered_line_ends, variant_ends, variant_lengths
 from planner.routing import FieldRouter
 from planner.types import Objective, SegmentKind, WaypointRole
@@ -334,73 +334,6 @@ def _plan_heading(
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + _order_length(variants, order, start_xy, finish_xy, None)
     return _Candidate(heading, cells, scan, variants, working, order, length, len(scan.u))
-
-
-def scan_cells(rings: list[tuple[FloatArray, FloatArray]], interval_m: float) -> LineScan:
-    """Place the lines of many sweep-monotone cells at once, as :func:`~planner.lines.scan_cell`.
-
-    Parameters
-    ----------
-    rings : list of (ndarray, ndarray)
-        Each cell's exterior ``(u, v)`` in the sweep frame, counter-clockwise, not closed [m].
-    interval_m : float
-
-    Returns
-    -------
-    LineScan
-        One entry per cell where :func:`~planner.lines.scan_cell` has one per heading
-        (``headings_deg`` is all zeros: the cells are already in the sweep frame).
-
-    Examples
-    --------
-    >>> square = (np.array([0.0, 16.0, 16.0, 0.0]), np.array([0.0, 0.0, 20.0, 20.0]))
-    >>> tri = (np.array([20.0, 26.0, 20.0]), np.array([0.0, 0.0, 6.0]))
-    >>> scan = scan_cells([square, tri], 4.0)
-    >>> scan.offsets.tolist(), scan.u.tolist(), scan.v_hi.tolist()
-    ([0, 4, 6], [2.0, 6.0, 10.0, 14.0, 22.0, 24.0], [20.0, 20.0, 20.0, 20.0, 4.0, 2.0])
-    """
-    d = float(interval_m)
-    sizes = np.array([len(u) for u, _ in rings])
-    u1 = np.concatenate([u for u, _ in rings])
-    v1 = np.concatenate([v for _, v in rings])
-    u2 = np.concatenate([np.roll(u, -1) for u, _ in rings])
-    v2 = np.concatenate([np.roll(v, -1) for _, v in rings])
-    cell_of_edge = np.repeat(np.arange(len(rings)), sizes)
-    starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    u_min = np.minimum.reduceat(u1, starts)
-    u_max = np.maximum.reduceat(u1, starts)
-    width = u_max - u_min
-    n = line_counts(width, d)
-    offsets = np.concatenate(([0], np.cumsum(n))).astype(np.int64)
-    c_of_line = np.repeat(np.arange(len(rings)), n)
-    k = np.arange(offsets[-1]) - offsets[c_of_line]
-    narrow = width <= d
-    first = np.where(narrow, (u_min + u_max) / 2.0, u_min + d / 2.0)
-    last = np.where(narrow, first, u_max - d / 2.0)
-    u = np.where(k == n[c_of_line] - 1, last[c_of_line], first[c_of_line] + k * d)
-    v_lo = np.empty_like(u)
-    v_hi = np.empty_like(u)
-    for lower, target in ((True, v_lo), (False, v_hi)):
-        e = np.nonzero((u2 > u1) if lower else (u2 < u1))[0]
-        lo, hi = (u1[e], u2[e]) if lower else (u2[e], u1[e])
-        c = cell_of_edge[e]
-        k1 = _lines_left_of(lo, first[c], last[c], n[c], d)
-        k2 = _lines_left_of(hi, first[c], last[c], n[c], d)
-        per_edge = k2 - k1
-        edge_of = np.repeat(np.arange(len(e)), per_edge)
-        within = np.arange(per_edge.sum()) - np.repeat(np.cumsum(per_edge) - per_edge, per_edge)
-        line = offsets[c[edge_of]] + k1[edge_of] + within
-        ee = e[edge_of]
-        target[line] = v1[ee] + (u[line] - u1[ee]) * (v2[ee] - v1[ee]) / (u2[ee] - u1[ee])
-    return LineScan(headings_deg=np.zeros(len(rings)), offsets=offsets, u=u, v_lo=v_lo, v_hi=v_hi)
-
-
-def _lines_left_of(
-    value: FloatArray, first: FloatArray, last: FloatArray, n: IntArray, d: float
-) -> IntArray:
-    """How many of a cell's line positions lie strictly left of ``value``."""
-    regular = np.clip(np.ceil((value - first) / d), 0, n - 1).astype(np.int64)
-    return regular + (last < value).astype(np.int64)
 
 
 def _reach_headland(plan: _Candidate, d: float) -> _Candidate:

@@ -100,13 +100,13 @@ class LineScan:
 
 
 def scan_cell(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float) -> LineScan:
-    """Place the lines of a convex cell for every heading in ``headings_deg``.
+    """Place the lines of one cell for every heading in ``headings_deg``.
 
     Parameters
     ----------
     ring_xy : ndarray, shape (m, 2)
         The cell's exterior, counter-clockwise, without the closing vertex, local [m].
-        Each line must cross it once (a convex cell).
+        Each line must cross it once (a convex cell, or one monotone across the sweep).
     headings_deg : ndarray, shape (A,)
         Line headings, degrees clockwise from north.
     interval_m : float
@@ -115,6 +115,7 @@ def scan_cell(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float) 
     Returns
     -------
     LineScan
+        One entry per heading.
 
     Examples
     --------
@@ -124,49 +125,80 @@ def scan_cell(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float) 
     ([2.0, 6.0, 10.0, 14.0], [0.0, 0.0, 0.0, 0.0], [20.0, 20.0, 20.0, 20.0])
     """
     headings_deg = np.asarray(headings_deg, dtype=float)
-    d = float(interval_m)
-    # Ring vertices in every heading's sweep frame: shape (A, m).
     u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings_deg[:, None])
-    u_min, u_max = u_ring.min(axis=1), u_ring.max(axis=1)
+    scan = scan_cells(list(zip(u_ring, v_ring, strict=True)), interval_m)
+    return LineScan(
+        headings_deg=headings_deg, offsets=scan.offsets, u=scan.u, v_lo=scan.v_lo, v_hi=scan.v_hi
+    )
+
+
+def scan_cells(rings: list[tuple[FloatArray, FloatArray]], interval_m: float) -> LineScan:
+    """Place the lines of many sweep-monotone cells at once, as one ragged array.
+
+    Each line takes its ends from the lower-chain edge (``u`` increasing along the
+    counter-clockwise ring) and the upper-chain edge (``u`` decreasing) whose ``u``-range holds
+    it. Counting the lines left of a value arithmetically makes the edges' ranges tile the
+    lines exactly, so each line gets one of each.
+
+    Parameters
+    ----------
+    rings : list of (ndarray, ndarray)
+        Each cell's exterior ``(u, v)`` in the sweep frame, counter-clockwise, not closed [m].
+    interval_m : float
+
+    Returns
+    -------
+    LineScan
+        One entry per cell (``headings_deg`` is all zeros: the cells are already in a sweep
+        frame).
+
+    Examples
+    --------
+    >>> square = (np.array([0.0, 16.0, 16.0, 0.0]), np.array([0.0, 0.0, 20.0, 20.0]))
+    >>> tri = (np.array([20.0, 26.0, 20.0]), np.array([0.0, 0.0, 6.0]))
+    >>> scan = scan_cells([square, tri], 4.0)
+    >>> scan.offsets.tolist(), scan.u.tolist(), scan.v_hi.tolist()
+    ([0, 4, 6], [2.0, 6.0, 10.0, 14.0, 22.0, 24.0], [20.0, 20.0, 20.0, 20.0, 4.0, 2.0])
+    """
+    d = float(interval_m)
+    sizes = np.array([len(u) for u, _ in rings])
+    u1 = np.concatenate([u for u, _ in rings])
+    v1 = np.concatenate([v for _, v in rings])
+    u2 = np.concatenate([np.roll(u, -1) for u, _ in rings])
+    v2 = np.concatenate([np.roll(v, -1) for _, v in rings])
+    cell_of_edge = np.repeat(np.arange(len(rings)), sizes)
+    starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    u_min = np.minimum.reduceat(u1, starts)
+    u_max = np.maximum.reduceat(u1, starts)
     width = u_max - u_min
     n = line_counts(width, d)
     offsets = np.concatenate(([0], np.cumsum(n))).astype(np.int64)
-    a_of_line = np.repeat(np.arange(len(headings_deg)), n)
-    k = np.arange(offsets[-1]) - offsets[a_of_line]
+    c_of_line = np.repeat(np.arange(len(rings)), n)
+    k = np.arange(offsets[-1]) - offsets[c_of_line]
     narrow = width <= d
-    # Regular positions from the near side; the last line d/2 inside the far side (R2, R3).
     first = np.where(narrow, (u_min + u_max) / 2.0, u_min + d / 2.0)
     last = np.where(narrow, first, u_max - d / 2.0)
-    u = np.where(k == n[a_of_line] - 1, last[a_of_line], first[a_of_line] + k * d)
-
-    # Each line takes its ends from the lower-chain edge (u increasing) and the upper-chain
-    # edge (u decreasing) whose u-range holds it. Counting lines left of a value
-    # arithmetically makes the edges' ranges tile [0, n) exactly, so each line gets one of each.
-    u1, v1 = u_ring, v_ring
-    u2, v2 = np.roll(u_ring, -1, axis=1), np.roll(v_ring, -1, axis=1)
+    u = np.where(k == n[c_of_line] - 1, last[c_of_line], first[c_of_line] + k * d)
     v_lo = np.empty_like(u)
     v_hi = np.empty_like(u)
-    for lower, (lo, hi), target in (
-        (True, (u1, u2), v_lo),
-        (False, (u2, u1), v_hi),
-    ):
-        mask = (u2 > u1) if lower else (u2 < u1)
-        a_idx, e_idx = np.nonzero(mask)
-        k1 = _lines_left_of(lo[a_idx, e_idx], first[a_idx], last[a_idx], n[a_idx], d)
-        k2 = _lines_left_of(hi[a_idx, e_idx], first[a_idx], last[a_idx], n[a_idx], d)
+    for lower, target in ((True, v_lo), (False, v_hi)):
+        e = np.nonzero((u2 > u1) if lower else (u2 < u1))[0]
+        lo, hi = (u1[e], u2[e]) if lower else (u2[e], u1[e])
+        c = cell_of_edge[e]
+        k1 = _lines_left_of(lo, first[c], last[c], n[c], d)
+        k2 = _lines_left_of(hi, first[c], last[c], n[c], d)
         per_edge = k2 - k1
-        edge_of = np.repeat(np.arange(len(a_idx)), per_edge)
+        edge_of = np.repeat(np.arange(len(e)), per_edge)
         within = np.arange(per_edge.sum()) - np.repeat(np.cumsum(per_edge) - per_edge, per_edge)
-        line = offsets[a_idx[edge_of]] + k1[edge_of] + within
-        ea, ee = a_idx[edge_of], e_idx[edge_of]
-        eu1, ev1, eu2, ev2 = u1[ea, ee], v1[ea, ee], u2[ea, ee], v2[ea, ee]
-        target[line] = ev1 + (u[line] - eu1) * (ev2 - ev1) / (eu2 - eu1)
-    return LineScan(headings_deg=headings_deg, offsets=offsets, u=u, v_lo=v_lo, v_hi=v_hi)
+        line = offsets[c[edge_of]] + k1[edge_of] + within
+        ee = e[edge_of]
+        target[line] = v1[ee] + (u[line] - u1[ee]) * (v2[ee] - v1[ee]) / (u2[ee] - u1[ee])
+    return LineScan(headings_deg=np.zeros(len(rings)), offsets=offsets, u=u, v_lo=v_lo, v_hi=v_hi)
 
 
 def _lines_left_of(
     value: FloatArray, first: FloatArray, last: FloatArray, n: IntArray, d: float
 ) -> IntArray:
-    """How many of a heading's line positions lie strictly left of ``value``."""
+    """Count a cell's line positions strictly left of ``value``."""
     regular = np.clip(np.ceil((value - first) / d), 0, n - 1).astype(np.int64)
     return regular + (last < value).astype(np.int64)
