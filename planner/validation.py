@@ -81,7 +81,7 @@ def validate_field(field_lonlat: Any) -> Polygon:
         # A valid polygon has three distinct vertices and an area, so count only here.
         if len(set(field_lonlat.exterior.coords)) < 3:
             raise InvalidFieldError("field", "polygon needs at least 3 distinct vertices")
-        if field_lonlat.area == 0.0:
+        if field_lonlat.convex_hull.geom_type != "Polygon":  # a bow tie has area 0 too
             raise InvalidFieldError("field", "polygon has no area: its vertices lie on one line")
         raise InvalidFieldError("field", _describe_invalid(reason))
     area_m2 = geodesic_area_m2(field_lonlat)

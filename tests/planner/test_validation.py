@@ -35,6 +35,13 @@ def test_collinear_vertices_have_no_area() -> None:
         plan(line)
 
 
+def test_symmetric_bow_tie_is_self_intersecting_not_flat() -> None:
+    bowtie = field_from_local([(0, 0), (40, 40), (40, 0), (0, 40)])
+    assert abs(bowtie.area) < 1e-12  # its two halves cancel
+    with pytest.raises(InvalidFieldError, match="^field: polygon is self-intersecting near"):
+        plan(bowtie)
+
+
 def test_self_intersection_says_where() -> None:
     bowtie = field_from_local([(0, 0), (40, 40), (40, 0), (0, 40)])
     with pytest.raises(InvalidFieldError) as caught:
