@@ -8,6 +8,7 @@ errors (a list of dicts) are turned into one such sentence too.
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Final
 
@@ -17,6 +18,8 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from app.tracks import TrackFormatError
+from navigation import NavigationError
 from planner import InvalidFieldError, InvalidParameterError, PlannerError, PlanTooLargeError
 
 logger = logging.getLogger(__name__)
@@ -53,6 +56,24 @@ class BodyTooLargeError(ValueError):
         self.limit = limit
 
 
+class UploadTooLargeError(BodyTooLargeError):
+    """An uploaded track file over the configured limit.
+
+    Parameters
+    ----------
+    limit : int
+        The limit [bytes].
+    """
+
+    def __init__(self, limit: int) -> None:
+        ValueError.__init__(self, f"file: the upload is larger than the limit of {limit} bytes")
+        self.limit = limit
+
+
+class ConflictError(ValueError):
+    """The request does not fit the object's state (fixes posted to an uploaded run)."""
+
+
 #: The one table: exception class -> HTTP status. Looked up along the class's MRO, so a
 #: subclass without its own row gets its parent's status.
 STATUS_CODES: Final[dict[type[Exception], int]] = {
@@ -60,6 +81,9 @@ STATUS_CODES: Final[dict[type[Exception], int]] = {
     InvalidParameterError: 422,
     PlanTooLargeError: 422,
     PlannerError: 422,
+    NavigationError: 422,
+    TrackFormatError: 422,
+    ConflictError: 409,
     RequestValidationError: 422,
     NotFoundError: 404,
     BodyTooLargeError: 413,
@@ -224,20 +248,44 @@ class BodySizeLimitMiddleware:
         The application to protect.
     max_body_bytes : int
         Largest body accepted [bytes].
+    upload_bytes : int, optional
+        Larger limit for the requests that upload files (``POST`` to a path matching
+        ``upload_path``) [bytes].
+    upload_path : str
+        Regular expression of the upload paths.
     """
 
-    def __init__(self, app: ASGIApp, *, max_body_bytes: int) -> None:
+    def __init__(
+        self,
+        app: ASGIApp,
+        *,
+        max_body_bytes: int,
+        upload_bytes: int | None = None,
+        upload_path: str = r"^/api/plans/[^/]+/runs/?$",
+    ) -> None:
         self.app = app
         self.max_body_bytes = max_body_bytes
+        self.upload_bytes = upload_bytes
+        self.upload_path = re.compile(upload_path)
+
+    def _limit(self, scope: Scope) -> tuple[int, bool]:
+        if (
+            self.upload_bytes is not None
+            and scope.get("method") == "POST"
+            and self.upload_path.match(scope.get("path", ""))
+        ):
+            return max(self.upload_bytes, self.max_body_bytes), True
+        return self.max_body_bytes, False
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         """Buffer and count the body, then run the app or answer 413."""
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        limit = self.max_body_bytes
+        limit, upload = self._limit(scope)
+        too_large = UploadTooLargeError(limit) if upload else BodyTooLargeError(limit)
         if _declared_length(scope) > limit:
-            await error_response(BodyTooLargeError(limit))(scope, receive, send)
+            await error_response(too_large)(scope, receive, send)
             return
 
         chunks: list[bytes] = []
@@ -249,7 +297,7 @@ class BodySizeLimitMiddleware:
             chunk = message.get("body", b"")
             size += len(chunk)
             if size > limit:
-                await error_response(BodyTooLargeError(limit))(scope, receive, send)
+                await error_response(too_large)(scope, receive, send)
                 return
             chunks.append(chunk)
             if not message.get("more_body", False):

@@ -8,7 +8,7 @@ from __future__ import annotations
 from fastapi import FastAPI
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
-from app.routers import health, pages, plans
+from app.routers import health, pages, plans, runs, simulations
 from app.settings import Settings, get_settings
 
 API_PREFIX = "/api"
@@ -43,9 +43,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         settings = get_settings()
 
     app.include_router(plans.router, prefix=API_PREFIX)
+    app.include_router(simulations.router, prefix=API_PREFIX)
+    app.include_router(runs.router, prefix=API_PREFIX)
     app.include_router(health.router, prefix=API_PREFIX)
     register_error_handlers(app)
-    app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes)
+    app.add_middleware(
+        BodySizeLimitMiddleware,
+        max_body_bytes=settings.max_body_bytes,
+        upload_bytes=settings.max_upload_bytes,
+    )
 
     pages.mount_pages(app)
     return app

@@ -13,7 +13,7 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
-from sqlalchemy import JSON, DateTime, Dialect, Integer, String
+from sqlalchemy import JSON, BigInteger, DateTime, Dialect, Double, ForeignKey, Integer, String
 from sqlalchemy.orm import Mapped, mapped_column
 from sqlalchemy.types import TypeDecorator
 
@@ -89,3 +89,100 @@ class Plan(Base):
     stats: Mapped[dict[str, Any]] = mapped_column(JSON)
     waypoints: Mapped[list[dict[str, Any]]] = mapped_column(JSON)
     geojson: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
+class Simulation(Base):
+    """A stored simulated run of a plan (product.md §7).
+
+    Attributes
+    ----------
+    id : int
+        Primary key.
+    plan_id : int
+        The simulated plan; deleting the plan deletes its simulations.
+    created_at : datetime
+        When it was run, UTC.
+    config : dict
+        ``{"seed", "gps", "guidance", "date"}``: running the simulator again with these gives
+        the same run.
+    metrics : dict
+        :meth:`navigation.TrackMetrics.as_dict` of the true track.
+    tracks : dict
+        GeoJSON FeatureCollection of the true, estimated and GPS tracks
+        (:func:`navigation.export.simulation_to_geojson`), one vertex per second.
+    """
+
+    __tablename__ = "simulations"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    plan_id: Mapped[int] = mapped_column(ForeignKey("plans.id", ondelete="CASCADE"), index=True)
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
+    config: Mapped[dict[str, Any]] = mapped_column(JSON)
+    metrics: Mapped[dict[str, Any]] = mapped_column(JSON)
+    tracks: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
+#: Where a run's fixes came from.
+RUN_SOURCES = ("gpx", "csv", "nmea", "live")
+
+
+class Run(Base):
+    """A real run of a tractor on a plan: an uploaded log or a live stream (product.md §8).
+
+    Attributes
+    ----------
+    id : int
+        Primary key.
+    plan_id : int
+        The plan that was driven; deleting the plan deletes its runs and their fixes.
+    name : str or None
+        The uploaded file's name, or a name given to a live run.
+    source : str
+        ``gpx``, ``csv``, ``nmea`` (uploaded) or ``live`` (fixes posted by the logger).
+    created_at : datetime
+        When the run was created, UTC.
+    import_report : dict
+        What the parser kept and dropped (``{"format", "fixes", "skipped_lines", …}``); empty
+        for a live run.
+    """
+
+    __tablename__ = "runs"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    plan_id: Mapped[int] = mapped_column(ForeignKey("plans.id", ondelete="CASCADE"), index=True)
+    name: Mapped[str | None] = mapped_column(String(PLAN_NAME_MAX_LENGTH))
+    source: Mapped[str] = mapped_column(String(8))
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
+    import_report: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
+class Fix(Base):
+    """One position of a run.
+
+    The primary key ``(run_id, t)`` is the unique constraint that makes a retried batch store
+    nothing twice (inserts use ``ON CONFLICT DO NOTHING``), and the index that reads a run's
+    fixes in time order.
+
+    Attributes
+    ----------
+    run_id : int
+        The run; deleting it deletes its fixes.
+    t : int
+        Time of the fix [µs since 1970-01-01T00:00:00Z]: an integer, so that equal timestamps
+        compare equal whatever text they came from.
+    lat, lon : float
+        WGS84 [deg].
+    heading_deg : float or None
+        Course over ground or compass heading, clockwise from true north [deg].
+    speed_mps : float or None
+        Speed over ground [m/s].
+    """
+
+    __tablename__ = "fixes"
+
+    run_id: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True)
+    t: Mapped[int] = mapped_column(BigInteger, primary_key=True, autoincrement=False)
+    lat: Mapped[float] = mapped_column(Double)
+    lon: Mapped[float] = mapped_column(Double)
+    heading_deg: Mapped[float | None] = mapped_column(Double)
+    speed_mps: Mapped[float | None] = mapped_column(Double)

@@ -150,3 +150,163 @@ class ErrorRead(BaseModel):
     """Every error answer: one sentence naming the input and the problem."""
 
     detail: str
+
+
+# --- Simulations (product.md §7) ---------------------------------------------------------
+
+GpsPreset = Literal["m8n", "rtk"]
+GuidanceMode = Literal["waypoint", "line"]
+
+#: Largest seed accepted (numpy takes any non-negative integer; this keeps it in a JSON int).
+MAX_SEED = 2**63 - 1
+
+
+class SimulationCreate(BaseModel):
+    """Body of ``POST /api/plans/{id}/simulations``: which tractor to simulate."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={"examples": [{"seed": 0, "gps": "m8n", "guidance": "waypoint"}]},
+    )
+
+    seed: int = Field(default=0, ge=0, le=MAX_SEED, description="Random seed; same seed, same run.")
+    gps: GpsPreset = Field(
+        default="m8n", description="GPS receiver: `m8n` (u-blox NEO-M8N, 2.5 m CEP) or `rtk`."
+    )
+    guidance: GuidanceMode = Field(
+        default="waypoint",
+        description="`waypoint` (the paper's law) or `line` (pure pursuit along the plan).",
+    )
+
+
+class StretchRead(BaseModel):
+    """A stretch of tillage line driven with the cross-track error over the threshold."""
+
+    start_s: float
+    end_s: float
+    duration_s: float
+    max_error_m: float
+    line: int
+
+
+class MetricsRead(BaseModel):
+    """How well a track followed its plan (:class:`navigation.TrackMetrics`)."""
+
+    completed: bool
+    time_s: float
+    distance_m: float
+    fix_count: int
+    on_line_share: float
+    cross_track_max_m: float | None
+    cross_track_rms_m: float | None
+    cross_track_p95_m: float | None
+    waypoint_error_max_m: float
+    waypoint_error_mean_m: float
+    waypoint_errors_m: list[float]
+    coverage_ratio: float
+    threshold_m: float
+    stretches: list[StretchRead]
+    filter_rms_m: float | None = None
+    gps_rms_m: float | None = None
+
+
+class SimulationRead(BaseModel):
+    """A stored simulation: its configuration, the true track's metrics and the tracks."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    plan_id: int
+    created_at: dt.datetime
+    config: dict[str, Any]
+    metrics: MetricsRead
+    tracks: dict[str, Any] = Field(
+        description="GeoJSON FeatureCollection: LineStrings `source` true, estimated, gps, "
+        "with `time_s` per vertex."
+    )
+
+
+# --- Field runs (product.md §8) ----------------------------------------------------------
+
+RunSource = Literal["gpx", "csv", "nmea", "live"]
+
+#: Most fixes accepted in one ``POST /api/runs/{id}/fixes`` batch.
+MAX_FIXES_PER_BATCH = 10_000
+
+
+class FixIn(BaseModel):
+    """One fix posted by the tractor's logger. Unknown keys (``hdop``, ``alt`` …) are ignored."""
+
+    model_config = ConfigDict(
+        extra="ignore",
+        allow_inf_nan=False,
+        json_schema_extra={
+            "examples": [
+                {"t": "2026-11-22T03:14:15.2Z", "lat": -8.62652, "lon": 115.29797},
+                {"t": 1795318455.4, "lat": -8.62651, "lon": 115.29798, "heading_deg": 12.5},
+            ]
+        },
+    )
+
+    t: float | str = Field(description="Time: ISO 8601 (UTC if no offset) or Unix epoch seconds.")
+    lat: float = Field(ge=-90, le=90, description="Latitude, WGS84 [deg].")
+    lon: float = Field(ge=-180, le=180, description="Longitude, WGS84 [deg].")
+    heading_deg: float | None = Field(default=None, description="Heading from true north [deg].")
+    speed_mps: float | None = Field(default=None, description="Speed over ground [m/s].")
+
+
+class FixesAdded(BaseModel):
+    """Answer to a batch of fixes: what was new, and how many the run now has."""
+
+    run_id: int
+    received: int = Field(description="Fixes in the batch.")
+    stored: int = Field(description="New fixes stored (repeated timestamps are not stored again).")
+    fix_count: int = Field(description="Fixes of the run after this batch.")
+
+
+class LastFix(BaseModel):
+    """The run's latest fix: where the tractor was last seen."""
+
+    t: dt.datetime
+    lat: float
+    lon: float
+    heading_deg: float | None
+    speed_mps: float | None
+
+
+class RunSummary(BaseModel):
+    """A run in a plan's list: no track, no metrics."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    plan_id: int
+    name: str | None
+    source: RunSource
+    created_at: dt.datetime
+    fix_count: int
+
+
+class RunList(BaseModel):
+    """A plan's runs, newest first."""
+
+    items: list[RunSummary]
+    total: int
+
+
+class RunRead(RunSummary):
+    """A run with its metrics against the plan, its track and its error stretches."""
+
+    import_report: dict[str, Any] = Field(
+        description="What the file parser kept and dropped (empty for a live run)."
+    )
+    started_at: dt.datetime | None = Field(description="Time of the first fix.")
+    last_fix: LastFix | None
+    metrics: MetricsRead | None = Field(description="Null while the run has no fix.")
+    track: dict[str, Any] | None = Field(
+        description="GeoJSON LineString Feature of the fixes (thinned to at most 20,000 "
+        "vertices for display), `time_s` per vertex from the first fix."
+    )
+    stretches: dict[str, Any] = Field(
+        description="GeoJSON FeatureCollection: a LineString per stretch over the threshold."
+    )

@@ -8,20 +8,25 @@ untouched (``app.errors`` maps them to HTTP).
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 import json
+import math
 import re
 import unicodedata
 from dataclasses import dataclass
 from typing import Any, Final
 
+import numpy as np
 from shapely import Polygon
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 import planner
 from app.errors import NotFoundError
-from app.models import PLAN_NAME_MAX_LENGTH, Plan
-from app.schemas import ExportFormat, PlanCreate, PlanList, PlanSummary
+from app.models import PLAN_NAME_MAX_LENGTH, Plan, Simulation, utc_now
+from app.schemas import ExportFormat, PlanCreate, PlanList, PlanSummary, SimulationCreate
+from navigation import GuidanceParams, SimulationConfig, simulate
+from navigation.export import simulation_to_geojson
 from planner.export import (
     plan_from_geojson,
     plan_to_csv,
@@ -29,6 +34,7 @@ from planner.export import (
     plan_to_gpx,
     plan_to_waypoints_json,
 )
+from planner.export.gpx import GpxTrack
 from planner.types import CoveragePlan, PlanStats, Waypoint
 
 #: Ids outside this range cannot exist (``plans.id`` is a 32-bit integer): 404 at once.
@@ -189,6 +195,106 @@ def polygon_to_geojson(polygon: Polygon) -> dict[str, Any]:
         "type": "Polygon",
         "coordinates": [[[x, y] for x, y, *_ in ring.coords] for ring in rings],
     }
+
+
+def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = None) -> Simulation:
+    """Drive stored ``plan`` with the simulated tractor; return an unsaved :class:`Simulation`.
+
+    Parameters
+    ----------
+    plan : Plan
+        A stored plan (its ``id`` is set).
+    body : SimulationCreate
+        Seed, GPS preset and guidance mode.
+    date : date, optional
+        Date of the run, for the magnetic declination; default today (UTC). It is stored in
+        the configuration, so the run can be repeated exactly.
+
+    Returns
+    -------
+    Simulation
+
+    Raises
+    ------
+    NavigationError
+        If the plan cannot be driven (the message names why).
+    """
+    date = date or utc_now().date()
+    config = SimulationConfig(gps=body.gps, guidance=GuidanceParams(mode=body.guidance), date=date)
+    log = simulate(coverage_plan_from_row(plan), config, np.random.default_rng(body.seed))
+    return Simulation(
+        plan_id=plan.id,
+        config={
+            "seed": body.seed,
+            "gps": body.gps,
+            "guidance": body.guidance,
+            "date": date.isoformat(),
+        },
+        metrics=json_ready(log.metrics.as_dict()),
+        tracks=json_ready(simulation_to_geojson(log)),
+    )
+
+
+def read_simulation(session: Session, simulation_id: int) -> Simulation:
+    """Return stored simulation ``simulation_id``.
+
+    Raises
+    ------
+    NotFoundError
+        If there is no such simulation.
+    """
+    found = session.get(Simulation, simulation_id) if 1 <= simulation_id <= MAX_ID else None
+    if found is None:
+        raise NotFoundError("simulation", simulation_id)
+    return found
+
+
+def export_simulation_gpx(session: Session, simulation: Simulation) -> ExportFile:
+    """Write a stored simulation as GPX: the plan as ``<rte>``, its three tracks as ``<trk>``.
+
+    The tracks are the stored ones (one vertex per second), timed from midnight UTC of the
+    simulation's date, as :func:`navigation.export.simulation_to_gpx` does.
+    """
+    plan = read_plan(session, simulation.plan_id)
+    start = dt.datetime.combine(
+        dt.date.fromisoformat(simulation.config["date"]), dt.time(0, 0), tzinfo=dt.UTC
+    )
+    tracks = []
+    for feature in simulation.tracks.get("features", []):
+        props = feature.get("properties") or {}
+        coords = feature["geometry"]["coordinates"]
+        times = props.get("time_s") or []
+        if len(times) < len(coords):  # a one-point track is written as two equal vertices
+            coords = coords[: len(times)]
+        tracks.append(
+            GpxTrack(
+                name=str(props.get("source", "track")),
+                lon=[c[0] for c in coords],
+                lat=[c[1] for c in coords],
+                time=[start + dt.timedelta(seconds=float(t)) for t in times],
+            )
+        )
+    title = f"{plan.name or f'plan {plan.id}'}: simulation {simulation.id}"
+    content = plan_to_gpx(coverage_plan_from_row(plan), name=title, tracks=tracks)
+    filename = f"{export_basename(plan)}-simulation-{simulation.id}.gpx"
+    return ExportFile(content=content, media_type=EXPORT_TYPES["gpx"][0], filename=filename)
+
+
+def json_ready(value: Any) -> Any:
+    """Return ``value`` with tuples as lists and non-finite floats as None (JSON columns).
+
+    Examples
+    --------
+    >>> json_ready({"a": (1.0, float("nan")), "b": [float("inf")]})
+    {'a': [1.0, None], 'b': [None]}
+    """
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    return value
 
 
 def _position(value: tuple[float, float] | None, name: str) -> tuple[float, float] | None:

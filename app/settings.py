@@ -29,6 +29,9 @@ class Settings(BaseSettings):
         Leaflet tile URL templates; point them at an offline tile server if needed.
     max_body_bytes : int
         Largest request body accepted [bytes]; larger ones get 413.
+    max_upload_bytes : int
+        Largest track file accepted by ``POST /api/plans/{id}/runs`` [bytes] (a 6-hour u-blox
+        NMEA log at 5 Hz is about 20 MB); larger ones get 413.
     """
 
     model_config = SettingsConfigDict(env_prefix="TILLPATH_", extra="ignore")
@@ -37,6 +40,7 @@ class Settings(BaseSettings):
     satellite_tile_url: str = ESRI_WORLD_IMAGERY_URL
     street_tile_url: str = OSM_TILE_URL
     max_body_bytes: int = Field(default=2 * 1024 * 1024, ge=1)
+    max_upload_bytes: int = Field(default=64 * 1024 * 1024, ge=1)
 
 
 @lru_cache

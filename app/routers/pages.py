@@ -71,8 +71,11 @@ def map_page(
     request: Request, settings: Annotated[Settings, Depends(get_settings)]
 ) -> HTMLResponse:
     """Render the map page: draw a field, plan a path, save and download it."""
+    plans_url = _plans_api_url(request)
     context = {
-        "plans_url": _plans_api_url(request),
+        "plans_url": plans_url,
+        # The API root: simulations and runs live at ``{api_url}/simulations/{id}``, ``/runs/…``.
+        "api_url": plans_url.rstrip("/").removesuffix("/plans"),
         "satellite_tile_url": settings.satellite_tile_url,
         "street_tile_url": settings.street_tile_url,
     }

@@ -72,3 +72,60 @@ export class PlansApi {
     return requestJson(this.planUrl(id), { method: "DELETE" });
   }
 }
+
+async function requestForm(url, form) {
+  let response;
+  try {
+    response = await fetch(url, { method: "POST", headers: { Accept: "application/json" }, body: form });
+  } catch {
+    throw new ApiError(0, null);
+  }
+  if (!response.ok) {
+    let detail = null;
+    try {
+      detail = (await response.json()).detail ?? null;
+    } catch {
+      // Not JSON: the status alone has to do.
+    }
+    throw new ApiError(response.status, detail);
+  }
+  return response.json();
+}
+
+/** Simulations and runs (product.md §5, §7, §8), given the API root (`…/api`). */
+export class ChecksApi {
+  constructor(apiUrl) {
+    this.apiUrl = apiUrl.replace(/\/+$/, "");
+  }
+
+  /** Simulate a stored plan: `{seed, gps, guidance}`; the answer has metrics and tracks. */
+  simulate(planId, body) {
+    return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/simulations`, {
+      method: "POST",
+      body,
+    });
+  }
+
+  simulationGpxUrl(id) {
+    return `${this.apiUrl}/simulations/${encodeURIComponent(id)}/export/gpx`;
+  }
+
+  /** Upload a recorded track (GPX, CSV or NMEA) as a new run of the plan. */
+  uploadRun(planId, file) {
+    const form = new FormData();
+    form.append("file", file, file.name);
+    return requestForm(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/runs`, form);
+  }
+
+  listRuns(planId) {
+    return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/runs`);
+  }
+
+  readRun(id) {
+    return requestJson(`${this.apiUrl}/runs/${encodeURIComponent(id)}`);
+  }
+
+  runGpxUrl(id) {
+    return `${this.apiUrl}/runs/${encodeURIComponent(id)}/export/gpx`;
+  }
+}

@@ -4,7 +4,8 @@
 
 /* global L */
 
-import { ApiError, PlansApi } from "./api.js";
+import { ApiError, ChecksApi, PlansApi } from "./api.js";
+import { setUpChecks } from "./checks.js";
 import { FieldFileError, polygonOf, readFieldFile } from "./fieldfile.js";
 import {
   formatAngle,
@@ -77,6 +78,7 @@ const state = {
   savedId: null, // the plan's id when what is shown is stored
   placing: null, // "start" | "finish" while waiting for a map click
   requestSeq: 0, // answers to superseded requests are dropped
+  checks: null, // simulations and runs of the stored plan (checks.js)
 };
 
 // ---------------------------------------------------------------- messages
@@ -488,6 +490,7 @@ function removePlan() {
   ui.summaryEmpty.hidden = false;
   renderDownloads();
   markCurrentSavedPlan();
+  state.checks?.planChanged(null);
 }
 
 function showPlan(plan, { saved }) {
@@ -498,6 +501,7 @@ function showPlan(plan, { saved }) {
   renderSummary(plan.stats);
   renderDownloads();
   markCurrentSavedPlan();
+  state.checks?.planChanged(state.savedId);
 }
 
 /** Fit `bounds`, keeping clear of the controls sheet when it covers the map on a phone. */
@@ -648,6 +652,7 @@ async function deletePlan(id, title) {
       // The path stays on the map, but it is no longer stored: nothing left to download.
       state.savedId = null;
       renderDownloads();
+      state.checks?.planChanged(null);
     }
     setStatus(`Deleted “${title}”.`);
   } catch (error) {
@@ -736,6 +741,13 @@ function main() {
   state.api = new PlansApi(dataset.plansUrl);
   state.map = createMap(dataset);
   setUpGeoman(state.map);
+  state.checks = setUpChecks({
+    map: state.map,
+    api: new ChecksApi(dataset.apiUrl),
+    setStatus,
+    showFailure,
+    clearError,
+  });
   wireControls();
   setPanelOpen(false);
   refreshSavedPlans();

@@ -35,6 +35,8 @@ PAPER_FIELD = SHARED / "fields" / "paper_ketewel.geojson"
 GPX_XSD = SHARED / "schemas" / "gpx-1.1.xsd"
 #: Body limit of the test app: small, so that 413 is cheap to provoke.
 TEST_MAX_BODY_BYTES = 256 * 1024
+#: Upload limit of the test app: above the test track files (about 300 kB), cheap to exceed.
+TEST_MAX_UPLOAD_BYTES = 1024 * 1024
 
 DATABASES = [
     "sqlite",
@@ -117,7 +119,13 @@ def session(engine: Engine) -> Iterator[Session]:
 
 @pytest.fixture
 def app(session: Session) -> Iterator[FastAPI]:
-    app = create_app(Settings(database_url="sqlite://", max_body_bytes=TEST_MAX_BODY_BYTES))
+    app = create_app(
+        Settings(
+            database_url="sqlite://",
+            max_body_bytes=TEST_MAX_BODY_BYTES,
+            max_upload_bytes=TEST_MAX_UPLOAD_BYTES,
+        )
+    )
 
     def override_session() -> Iterator[Session]:
         yield session

@@ -21,11 +21,15 @@ from app.errors import (
     STATUS_CODES,
     BodySizeLimitMiddleware,
     BodyTooLargeError,
+    ConflictError,
     NotFoundError,
+    UploadTooLargeError,
     format_validation_errors,
     status_for,
 )
 from app.models import Plan
+from app.tracks import TrackFormatError
+from navigation import NavigationError
 from planner import InvalidFieldError, InvalidParameterError, PlannerError, PlanTooLargeError
 
 PAPER_RING = [
@@ -265,7 +269,11 @@ def test_error_table_maps_every_planner_error_to_422():
     assert status_for(BodyTooLargeError(10)) == 413
     assert status_for(RequestValidationError([])) == 422
     assert status_for(RuntimeError("boom")) == 500
-    assert set(STATUS_CODES.values()) == {404, 413, 422}
+    assert status_for(NavigationError("gps", "x")) == 422
+    assert status_for(TrackFormatError("file", "x")) == 422
+    assert status_for(UploadTooLargeError(10)) == 413
+    assert status_for(ConflictError("run 1: x")) == 409
+    assert set(STATUS_CODES.values()) == {404, 409, 413, 422}
 
 
 def test_format_validation_errors_names_nested_inputs():

@@ -289,11 +289,16 @@ def test_satellite_and_openstreetmap_layers_are_offered(page: Page) -> None:
     expect(street).to_be_checked()
 
 
-def test_simulate_and_upload_track_are_disabled_until_they_exist(page: Page) -> None:
+def test_simulate_and_upload_track_are_enabled_once_the_plan_is_saved(page: Page) -> None:
     for name in ["Simulate", "Upload track"]:
-        control = button(page, name)
-        expect(control).to_be_disabled()
-        expect(control).to_have_attribute("title", "coming soon")
+        expect(button(page, name)).to_be_disabled()
+    import_paper_field(page)
+    generate(page)
+    for name in ["Simulate", "Upload track"]:
+        expect(button(page, name)).to_be_disabled()
+    save(page, f"Enable {uuid.uuid4().hex[:6]}")
+    for name in ["Simulate", "Upload track"]:
+        expect(button(page, name)).to_be_enabled()
 
 
 def test_every_control_has_its_accessible_name(page: Page) -> None:

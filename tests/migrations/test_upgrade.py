@@ -47,7 +47,7 @@ def test_upgrade_head_then_downgrade_base(empty_database_url: str):
 
     upgrade_database(url)
     assert current_revision(url) == head_revision(url)
-    assert tables(url) == {"alembic_version", "plans"}
+    assert tables(url) == {"alembic_version", "plans", "simulations", "runs", "fixes"}
     engine = migration_engine(url)
     try:
         inspector = inspect(engine)
@@ -115,7 +115,7 @@ def test_cli_db_upgrade_migrates_the_configured_database(settings_from_env: str)
     result = CliRunner().invoke(cli, ["db", "upgrade"])
     assert result.exit_code == 0, result.output
     assert "up to date" in result.output
-    assert tables(settings_from_env) == {"alembic_version", "plans"}
+    assert tables(settings_from_env) == {"alembic_version", "plans", "simulations", "runs", "fixes"}
 
 
 def test_cli_db_upgrade_unreachable_database_fails_cleanly(
@@ -137,3 +137,34 @@ def test_alembic_config_points_at_this_project():
     config = alembic_config("sqlite://")
     assert Path(config.get_main_option("script_location") or "").name == "migrations"
     assert (Path(config.get_main_option("script_location") or "") / "env.py").is_file()
+
+
+def test_fixes_are_keyed_by_run_and_time_and_cascade_from_plans(empty_database_url: str):
+    url = empty_database_url
+    upgrade_database(url)
+    engine = migration_engine(url)
+    try:
+        inspector = inspect(engine)
+        assert inspector.get_pk_constraint("fixes")["constrained_columns"] == ["run_id", "t"]
+        for table, column, parent in [
+            ("simulations", "plan_id", "plans"),
+            ("runs", "plan_id", "plans"),
+            ("fixes", "run_id", "runs"),
+        ]:
+            (fk,) = inspector.get_foreign_keys(table)
+            assert fk["constrained_columns"] == [column]
+            assert fk["referred_table"] == parent
+            assert fk["options"].get("ondelete") == "CASCADE"
+    finally:
+        engine.dispose()
+
+
+def test_each_revision_downgrades_to_its_parent(empty_database_url: str):
+    url = empty_database_url
+    upgrade_database(url)
+    command.downgrade(alembic_config(url), "0002")
+    assert tables(url) == {"alembic_version", "plans", "simulations"}
+    command.downgrade(alembic_config(url), "0001")
+    assert tables(url) == {"alembic_version", "plans"}
+    upgrade_database(url)
+    assert "fixes" in tables(url)

@@ -1,0 +1,72 @@
+"""Simulations: drive a stored plan with the simulated tractor (product.md §5, §7)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, Response, status
+
+from app import services
+from app.db import SessionDep
+from app.models import Simulation
+from app.schemas import ErrorRead, SimulationCreate, SimulationRead
+
+router = APIRouter(tags=["simulations"])
+
+_BAD_INPUT: dict[int | str, dict[str, Any]] = {
+    422: {"model": ErrorRead, "description": "The input named in `detail` is wrong"}
+}
+_NOT_FOUND: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorRead, "description": "No such plan or simulation"}
+}
+
+
+@router.post(
+    "/plans/{plan_id}/simulations",
+    response_model=SimulationRead,
+    status_code=status.HTTP_201_CREATED,
+    responses={**_BAD_INPUT, **_NOT_FOUND},
+)
+def create_simulation(
+    plan_id: int, session: SessionDep, response: Response, body: SimulationCreate | None = None
+) -> Simulation:
+    """Simulate the tractor driving a stored plan; store and return the run.
+
+    The body is optional (defaults: seed 0, `m8n`, `waypoint`).
+    """
+    plan = services.read_plan(session, plan_id)
+    simulation = services.simulate_plan(plan, body or SimulationCreate())
+    session.add(simulation)
+    session.commit()
+    response.headers["Location"] = f"/api/simulations/{simulation.id}"
+    return simulation
+
+
+@router.get(
+    "/simulations/{simulation_id}",
+    response_model=SimulationRead,
+    responses={**_BAD_INPUT, **_NOT_FOUND},
+)
+def read_simulation(simulation_id: int, session: SessionDep) -> Simulation:
+    """Return a stored simulation with its metrics and tracks."""
+    return services.read_simulation(session, simulation_id)
+
+
+@router.get(
+    "/simulations/{simulation_id}/export/gpx",
+    response_class=Response,
+    responses={
+        200: {"description": "GPX 1.1 download", "content": {"application/gpx+xml": {}}},
+        **_NOT_FOUND,
+        **_BAD_INPUT,
+    },
+)
+def export_simulation_gpx(simulation_id: int, session: SessionDep) -> Response:
+    """Download a simulation as GPX: the plan as a route, true/estimated/GPS tracks as tracks."""
+    simulation = services.read_simulation(session, simulation_id)
+    export = services.export_simulation_gpx(session, simulation)
+    return Response(
+        content=export.content,
+        media_type=export.media_type,
+        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
+    )

@@ -1,0 +1,428 @@
+"""Field runs: store a tractor's fixes and score them against their plan (product.md §8).
+
+Thin adapters between the routes, :mod:`app.tracks` (file parsing), the ``runs`` and ``fixes``
+tables and :func:`navigation.score_track` (the same scoring as a simulation's).
+
+Fixes are inserted with ``INSERT … ON CONFLICT (run_id, t) DO NOTHING`` (SQLAlchemy's SQLite
+and PostgreSQL dialect inserts): a batch that arrives twice, late or out of order stores each
+timestamp once, and concurrent batches cannot race, since the database's unique key decides.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Final
+
+import numpy as np
+import numpy.typing as npt
+from sqlalchemy import func, select
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.orm import Session
+
+from app.errors import ConflictError, NotFoundError
+from app.models import Fix, Plan, Run
+from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
+from app.services import MAX_ID, ExportFile, coverage_plan_from_row, export_basename, json_ready
+from app.tracks import (
+    ParsedTrack,
+    TrackFix,
+    TrackFormatError,
+    parse_time,
+    sort_fixes,
+    us_to_datetime,
+)
+from navigation import TrackMetrics, score_track
+from planner.export.gpx import GpxTrack, plan_to_gpx
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Rows per bulk ``INSERT`` statement (6 parameters each: under SQLite's 32,766 limit).
+INSERT_CHUNK_ROWS: Final = 5000
+#: Most vertices of the track returned for display.
+MAX_TRACK_POINTS: Final = 20_000
+#: Default cross-track error threshold of the reported stretches [m].
+DEFAULT_THRESHOLD_M: Final = 1.0
+
+
+@dataclass(frozen=True, slots=True)
+class RunTrack:
+    """A run's fixes as arrays, in time order.
+
+    Attributes
+    ----------
+    t : int array
+        Times [µs since the Unix epoch].
+    lon, lat : float arrays
+        WGS84 [deg].
+    heading_deg, speed_mps : float arrays
+        NaN where unknown.
+    """
+
+    t: npt.NDArray[np.int64]
+    lon: FloatArray
+    lat: FloatArray
+    heading_deg: FloatArray
+    speed_mps: FloatArray
+
+    def time_s(self) -> FloatArray:
+        """Seconds since the first fix."""
+        return np.asarray((self.t - self.t[0]) / 1e6, dtype=float) if len(self.t) else np.array([])
+
+
+# --- storing -------------------------------------------------------------------------------
+
+
+def _insert(session: Session) -> Any:
+    dialect = session.get_bind().dialect.name
+    if dialect == "postgresql":
+        return postgresql.insert
+    if dialect == "sqlite":
+        return sqlite.insert
+    raise NotImplementedError(f"fixes: no ON CONFLICT insert for the {dialect} dialect")
+
+
+def _rows(run_id: int, fixes: Sequence[TrackFix]) -> list[dict[str, Any]]:
+    return [
+        {
+            "run_id": run_id,
+            "t": f.t,
+            "lat": f.lat,
+            "lon": f.lon,
+            "heading_deg": f.heading_deg,
+            "speed_mps": f.speed_mps,
+        }
+        for f in fixes
+    ]
+
+
+def insert_fixes(session: Session, run_id: int, fixes: Sequence[TrackFix]) -> int:
+    """Insert ``fixes`` into run ``run_id``, skipping timestamps it already has.
+
+    Parameters
+    ----------
+    session : Session
+        Not committed here: the caller decides (an upload stores its run and all its fixes in
+        one transaction).
+    run_id : int
+    fixes : sequence of TrackFix
+        Any order; repeated times are allowed (only the first is stored).
+
+    Returns
+    -------
+    int
+        How many fixes were new.
+    """
+    fixes, _ = sort_fixes(fixes)
+    if not fixes:
+        return 0
+    stmt = (
+        _insert(session)(Fix)
+        .on_conflict_do_nothing(index_elements=["run_id", "t"])
+        .returning(Fix.t)
+    )
+    # One executemany: SQLAlchemy sends it as multi-row INSERTs ("insertmanyvalues") and
+    # RETURNING gives back the rows that were new, not those already there.
+    result = session.execute(
+        stmt,
+        _rows(run_id, fixes),
+        execution_options={"insertmanyvalues_page_size": INSERT_CHUNK_ROWS},
+    )
+    stored = len(result.all())
+    return stored
+
+
+def create_run_from_track(
+    session: Session, plan: Plan, track: ParsedTrack, *, name: str | None
+) -> Run:
+    """Store an uploaded track as a new run of ``plan``, all or nothing, and commit.
+
+    Parameters
+    ----------
+    session : Session
+    plan : Plan
+        A stored plan.
+    track : ParsedTrack
+        The parsed file (at least one fix).
+    name : str or None
+        The file's name.
+
+    Returns
+    -------
+    Run
+    """
+    run = Run(
+        plan_id=plan.id, name=name, source=track.format, import_report=json_ready(track.report)
+    )
+    _end_read_transaction(session)
+    try:
+        session.add(run)
+        session.flush()
+        insert_fixes(session, run.id, track.fixes)
+        session.commit()
+    except BaseException:
+        session.rollback()
+        raise
+    return run
+
+
+def create_live_run(session: Session, plan: Plan, *, name: str | None) -> Run:
+    """Create an empty live run of ``plan`` (fixes come later) and commit."""
+    run = Run(plan_id=plan.id, name=name, source="live", import_report={})
+    session.add(run)
+    session.commit()
+    return run
+
+
+def add_fixes(session: Session, run: Run, fixes_in: Sequence[FixIn]) -> tuple[int, int]:
+    """Store a batch posted by a live run's logger; return ``(stored, fix_count)``.
+
+    Raises
+    ------
+    ConflictError
+        If the run is an uploaded track, not a live run.
+    TrackFormatError
+        For a batch over :data:`MAX_FIXES_PER_BATCH` or a fix with a bad time (naming it).
+    """
+    if run.source != "live":
+        raise ConflictError(
+            f"run {run.id}: is an uploaded {run.source.upper()} track; fixes can be posted to "
+            "live runs only (create one with POST /api/plans/{id}/runs and no file)"
+        )
+    if len(fixes_in) > MAX_FIXES_PER_BATCH:
+        raise TrackFormatError(
+            "body", f"has {len(fixes_in)} fixes; send at most {MAX_FIXES_PER_BATCH} per batch"
+        )
+    fixes = [
+        TrackFix(
+            t=parse_time(f.t, input_name=f"[{i}].t"),
+            lat=f.lat,
+            lon=f.lon,
+            heading_deg=f.heading_deg,
+            speed_mps=f.speed_mps,
+        )
+        for i, f in enumerate(fixes_in)
+    ]
+    _end_read_transaction(session)
+    try:
+        stored = insert_fixes(session, run.id, fixes)
+        session.commit()
+    except BaseException:
+        session.rollback()
+        raise
+    return stored, count_fixes(session, run.id)
+
+
+def _end_read_transaction(session: Session) -> None:
+    """End the transaction of the reads so far, so the writes start a transaction of their own.
+
+    SQLite cannot turn a read transaction into a write one while another connection writes: it
+    fails at once with "database is locked" instead of waiting (that could deadlock). A
+    transaction whose first statement writes waits for the lock (the busy timeout). Nothing
+    has been written yet, so nothing is committed here.
+    """
+    if session.in_transaction():
+        session.commit()
+
+
+# --- reading -------------------------------------------------------------------------------
+
+
+def read_run(session: Session, run_id: int) -> Run:
+    """Return stored run ``run_id``.
+
+    Raises
+    ------
+    NotFoundError
+        If there is no such run.
+    """
+    run = session.get(Run, run_id) if 1 <= run_id <= MAX_ID else None
+    if run is None:
+        raise NotFoundError("run", run_id)
+    return run
+
+
+def count_fixes(session: Session, run_id: int) -> int:
+    """Return how many fixes run ``run_id`` has."""
+    return session.scalar(select(func.count()).select_from(Fix).where(Fix.run_id == run_id)) or 0
+
+
+def load_track(session: Session, run_id: int) -> RunTrack:
+    """Load a run's fixes in time order as arrays.
+
+    The rows come straight from the driver's cursor into numpy (one query on the
+    ``(run_id, t)`` key); going through SQLAlchemy's row objects costs more than the scoring
+    for a day's log. Times (µs since 1970, below 2**53 until the year 2255) pass through a
+    float64 array exactly.
+    """
+    dbapi_connection = session.connection().connection.dbapi_connection
+    assert dbapi_connection is not None
+    cursor = dbapi_connection.cursor()
+    try:
+        # ``run_id`` is an int: formatting it in is safe, and spares the two paramstyles.
+        cursor.execute(
+            "SELECT t, lon, lat, heading_deg, speed_mps FROM fixes "
+            f"WHERE run_id = {int(run_id)} ORDER BY t"
+        )
+        rows = cursor.fetchall()
+    finally:
+        cursor.close()
+    if not rows:
+        empty = np.array([], dtype=float)
+        return RunTrack(np.array([], dtype=np.int64), empty, empty, empty, empty)
+    table = np.array(rows, dtype=np.float64)  # None -> nan
+    return RunTrack(
+        t=table[:, 0].astype(np.int64),
+        lon=table[:, 1],
+        lat=table[:, 2],
+        heading_deg=table[:, 3],
+        speed_mps=table[:, 4],
+    )
+
+
+def score_run(plan: Plan, track: RunTrack, *, threshold_m: float) -> TrackMetrics | None:
+    """Score a run's track against its plan with :func:`navigation.score_track` (None if empty)."""
+    if len(track.t) == 0:
+        return None
+    return score_track(
+        coverage_plan_from_row(plan),
+        track.time_s(),
+        track.lon,
+        track.lat,
+        threshold_m=threshold_m,
+    )
+
+
+def list_runs(session: Session, plan_id: int) -> RunList:
+    """Return ``plan_id``'s runs, newest first, with their fix counts."""
+    counts = select(Fix.run_id, func.count().label("n")).group_by(Fix.run_id).subquery("counts")
+    rows = session.execute(
+        select(Run, func.coalesce(counts.c.n, 0))
+        .outerjoin(counts, counts.c.run_id == Run.id)
+        .where(Run.plan_id == plan_id)
+        .order_by(Run.created_at.desc(), Run.id.desc())
+    ).all()
+    items = [
+        RunSummary(
+            id=run.id,
+            plan_id=run.plan_id,
+            name=run.name,
+            source=run.source,
+            created_at=run.created_at,
+            fix_count=int(n),
+        )
+        for run, n in rows
+    ]
+    return RunList(items=items, total=len(items))
+
+
+def _thin(n: int, limit: int) -> npt.NDArray[np.int64]:
+    if n <= limit:
+        return np.arange(n)
+    keep = np.arange(0, n, math.ceil(n / limit))
+    return keep if keep[-1] == n - 1 else np.append(keep, n - 1)
+
+
+def run_view(
+    session: Session, run: Run, *, threshold_m: float = DEFAULT_THRESHOLD_M
+) -> dict[str, Any]:
+    """Everything ``GET /api/runs/{id}`` answers: the run, its metrics, track and stretches."""
+    plan = session.get(Plan, run.plan_id)
+    if plan is None:  # deleted meanwhile: the run went with it
+        raise NotFoundError("run", run.id)
+    track = load_track(session, run.id)
+    metrics = score_run(plan, track, threshold_m=threshold_m)
+    n = len(track.t)
+    view: dict[str, Any] = {
+        "id": run.id,
+        "plan_id": run.plan_id,
+        "name": run.name,
+        "source": run.source,
+        "created_at": run.created_at,
+        "fix_count": n,
+        "import_report": run.import_report,
+        "started_at": us_to_datetime(int(track.t[0])) if n else None,
+        "last_fix": None,
+        "metrics": json_ready(metrics.as_dict()) if metrics else None,
+        "track": None,
+        "stretches": {"type": "FeatureCollection", "features": []},
+    }
+    if not n:
+        return view
+    view["last_fix"] = {
+        "t": us_to_datetime(int(track.t[-1])),
+        "lat": float(track.lat[-1]),
+        "lon": float(track.lon[-1]),
+        "heading_deg": _finite(track.heading_deg[-1]),
+        "speed_mps": _finite(track.speed_mps[-1]),
+    }
+    time_s = track.time_s()
+    keep = _thin(n, MAX_TRACK_POINTS)
+    coords = np.column_stack([track.lon[keep], track.lat[keep]]).round(8).tolist()
+    if len(coords) == 1:
+        coords.append(coords[0])
+    view["track"] = {
+        "type": "Feature",
+        "properties": {
+            "kind": "track",
+            "source": run.source,
+            "time_s": time_s[keep].round(3).tolist(),
+        },
+        "geometry": {"type": "LineString", "coordinates": coords},
+    }
+    features = []
+    for stretch in metrics.stretches if metrics else ():
+        lo = int(np.searchsorted(time_s, stretch.start_s, side="left"))
+        hi = int(np.searchsorted(time_s, stretch.end_s, side="right"))
+        part = np.column_stack([track.lon[lo:hi], track.lat[lo:hi]]).round(8).tolist()
+        if len(part) == 1:
+            part.append(part[0])
+        features.append(
+            {
+                "type": "Feature",
+                "properties": {"kind": "stretch", **json_ready(_stretch_dict(stretch))},
+                "geometry": {"type": "LineString", "coordinates": part},
+            }
+        )
+    view["stretches"]["features"] = features
+    return view
+
+
+def _stretch_dict(stretch: Any) -> dict[str, Any]:
+    return {
+        "start_s": stretch.start_s,
+        "end_s": stretch.end_s,
+        "duration_s": stretch.duration_s,
+        "max_error_m": stretch.max_error_m,
+        "line": stretch.line,
+    }
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def export_run_gpx(session: Session, run: Run) -> ExportFile:
+    """Write a run as GPX: its fixes as a timed ``<trk>``, the plan as ``<rte>``.
+
+    Raises
+    ------
+    TrackFormatError
+        If the run has no fix yet (a new live run): there is no track to write.
+    """
+    plan = session.get(Plan, run.plan_id)
+    if plan is None:
+        raise NotFoundError("run", run.id)
+    track = load_track(session, run.id)
+    if len(track.t) == 0:
+        raise ConflictError(f"run {run.id}: has no fix yet; there is no track to export")
+    times = [us_to_datetime(int(t)) for t in track.t]
+    title = run.name or f"run {run.id}"
+    content = plan_to_gpx(
+        coverage_plan_from_row(plan),
+        name=f"{plan.name or f'plan {plan.id}'}: {title}",
+        tracks=[GpxTrack(name=title, lon=track.lon.tolist(), lat=track.lat.tolist(), time=times)],
+    )
+    filename = f"{export_basename(plan)}-run-{run.id}.gpx"
+    return ExportFile(content=content, media_type="application/gpx+xml", filename=filename)
