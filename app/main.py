@@ -36,6 +36,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             '`{"detail": "<input>: <problem>"}`.'
         ),
         version="0.1.0",
+        # /docs is served offline by the pages router; ReDoc would need a CDN.
+        docs_url=None,
+        redoc_url=None,
     )
     if settings is not None:
         app.dependency_overrides[get_settings] = lambda: settings

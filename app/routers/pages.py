@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, FastAPI, Request
+from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
@@ -35,6 +36,7 @@ VENDOR_DIRS: dict[str, tuple[str, Path]] = {
         "vendor-leaflet-geoman",
         NODE_MODULES / "@geoman-io" / "leaflet-geoman-free" / "dist",
     ),
+    "/vendor/swagger-ui": ("vendor-swagger-ui", NODE_MODULES / "swagger-ui-dist"),
 }
 
 #: Where the plans API lives when its route cannot be looked up by name.
@@ -64,6 +66,23 @@ def _plans_api_url(request: Request) -> str:
         # The API router names its handler ``list_plans`` (style guide); if it ever does not,
         # the documented path still works.
         return str(request.base_url).rstrip("/") + PLANS_API_FALLBACK
+
+
+@router.get("/docs", response_class=HTMLResponse, name="api_docs")
+def api_docs(request: Request) -> HTMLResponse:
+    """Swagger UI for the OpenAPI description, served from npm like the map's libraries.
+
+    FastAPI's default page loads Swagger UI from a CDN, which a farm office without internet
+    cannot reach.
+    """
+    vendor = str(request.url_for("vendor-swagger-ui", path="")).rstrip("/")
+    return get_swagger_ui_html(
+        openapi_url=str(request.url_for("openapi")),
+        title="tillpath API",
+        swagger_js_url=f"{vendor}/swagger-ui-bundle.js",
+        swagger_css_url=f"{vendor}/swagger-ui.css",
+        swagger_favicon_url=f"{vendor}/favicon-32x32.png",
+    )
 
 
 @router.get("/", response_class=HTMLResponse, name="map_page")

@@ -11,8 +11,9 @@ import urllib.error
 import urllib.request
 
 import pytest
+from playwright.sync_api import expect
 
-from tests.browser.conftest import NO_TILES
+from tests.browser.conftest import NO_TILES, MapPageOpener
 
 pytestmark = pytest.mark.browser
 
@@ -76,3 +77,22 @@ def test_page_loads_no_code_from_elsewhere(server_url: str) -> None:
     assert sources, "the page references no scripts or styles"
     outside = [url for url in sources if not url.startswith(server_url + "/")]
     assert outside == []
+
+
+def test_api_docs_load_swagger_ui_from_the_app(server_url: str) -> None:
+    status, content_type, body = fetch(server_url + "/docs")
+    assert status == 200 and content_type.startswith("text/html")
+    sources = re.findall(r'(?:src|href|url): ?["\']([^"\']+)["\']', body)
+    sources += re.findall(r'<(?:script|link)\b[^>]*?(?:src|href)="([^"]+)"', body)
+    assert any("swagger-ui-bundle.js" in url for url in sources)
+    outside = [url for url in sources if not url.startswith(server_url + "/")]
+    assert outside == []
+    for url in sources:
+        assert fetch(url)[0] == 200, url
+
+
+def test_api_docs_render_offline(open_map: MapPageOpener, server_url: str) -> None:
+    # open_map's context aborts and fails on any request that leaves the test server.
+    page = open_map()
+    page.goto(server_url + "/docs")
+    expect(page.get_by_text("/api/plans/preview", exact=True)).to_be_visible(timeout=20_000)
