@@ -26,6 +26,9 @@ run: install
 
 test: install
 	scripts/ensure-chromium
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
 	$(BIN)/python -m pytest
 
 # The API benchmark loads the server with wrk (Debian), a real HTTP load generator.

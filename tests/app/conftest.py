@@ -10,8 +10,6 @@ leave rows in the shared one. The schema is made by ``alembic upgrade head``, ne
 from __future__ import annotations
 
 import json
-import os
-import uuid
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -19,8 +17,7 @@ from typing import Any
 import pytest
 from alembic import command
 from fastapi import FastAPI
-from sqlalchemy import Engine, create_engine, text
-from sqlalchemy.engine import make_url
+from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 from sqlalchemy.pool import StaticPool
 from starlette.testclient import TestClient
@@ -28,8 +25,8 @@ from starlette.testclient import TestClient
 from app.db import alembic_config, get_session, make_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
+from tests.databases import DATABASES, scratch_pg_database
 
-PG_URL_ENV = "TILLPATH_TEST_DATABASE_URL"
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 PAPER_FIELD = SHARED / "fields" / "paper_ketewel.geojson"
 GPX_XSD = SHARED / "schemas" / "gpx-1.1.xsd"
@@ -37,45 +34,6 @@ GPX_XSD = SHARED / "schemas" / "gpx-1.1.xsd"
 TEST_MAX_BODY_BYTES = 256 * 1024
 #: Upload limit of the test app: above the test track files (about 300 kB), cheap to exceed.
 TEST_MAX_UPLOAD_BYTES = 1024 * 1024
-
-DATABASES = [
-    "sqlite",
-    *(
-        [pytest.param("postgresql", marks=pytest.mark.postgres)]
-        if os.environ.get(PG_URL_ENV)
-        else []
-    ),
-]
-
-
-def create_pg_database(base_url: str) -> str:
-    """Create an empty database on the server of ``base_url``; return its URL."""
-    name = f"tillpath_test_{uuid.uuid4().hex[:12]}"
-    admin = create_engine(base_url, isolation_level="AUTOCOMMIT")
-    try:
-        with admin.connect() as conn:
-            conn.execute(text(f'CREATE DATABASE "{name}"'))
-    finally:
-        admin.dispose()
-    return make_url(base_url).set(database=name).render_as_string(hide_password=False)
-
-
-def drop_pg_database(base_url: str, url: str) -> None:
-    """Drop the database of ``url`` (made by :func:`create_pg_database`)."""
-    name = make_url(url).database
-    admin = create_engine(base_url, isolation_level="AUTOCOMMIT")
-    try:
-        with admin.connect() as conn:
-            conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-    finally:
-        admin.dispose()
-
-
-@pytest.fixture(scope="session")
-def pg_base_url() -> str:
-    url = os.environ.get(PG_URL_ENV)
-    assert url, f"{PG_URL_ENV} is not set"
-    return url
 
 
 @pytest.fixture(scope="session", params=DATABASES)
@@ -91,15 +49,13 @@ def engine(request: pytest.FixtureRequest) -> Iterator[Engine]:
         yield engine
         engine.dispose()
         return
-    base_url = request.getfixturevalue("pg_base_url")
-    url = create_pg_database(base_url)
-    engine = make_engine(url)
-    try:
-        upgrade_database(url)
-        yield engine
-    finally:
-        engine.dispose()
-        drop_pg_database(base_url, url)
+    with scratch_pg_database() as url:
+        engine = make_engine(url)
+        try:
+            upgrade_database(url)
+            yield engine
+        finally:
+            engine.dispose()
 
 
 @pytest.fixture

@@ -13,7 +13,6 @@ import subprocess
 import sys
 import threading
 import time
-import uuid
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -22,22 +21,12 @@ from typing import Any
 import httpx2
 import pytest
 import uvicorn
-from sqlalchemy import create_engine, text
-from sqlalchemy.engine import make_url
 
 from app.db import get_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
+from tests.databases import DATABASES, scratch_pg_database
 
-PG_URL_ENV = "TILLPATH_TEST_DATABASE_URL"
-DATABASES = [
-    "sqlite",
-    *(
-        [pytest.param("postgresql", marks=pytest.mark.postgres)]
-        if os.environ.get(PG_URL_ENV)
-        else []
-    ),
-]
 MAX_BODY_BYTES = 64 * 1024
 PAPER = {
     "type": "Polygon",
@@ -53,15 +42,6 @@ PAPER = {
 }
 
 
-def _admin(base_url: str, sql: str) -> None:
-    engine = create_engine(base_url, isolation_level="AUTOCOMMIT")
-    try:
-        with engine.connect() as conn:
-            conn.execute(text(sql))
-    finally:
-        engine.dispose()
-
-
 @pytest.fixture(params=DATABASES)
 def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
     """A freshly migrated database; PostgreSQL's is dropped after the test."""
@@ -72,17 +52,13 @@ def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str
         get_engine(url).dispose()
         get_engine.cache_clear()
         return
-    base_url = os.environ[PG_URL_ENV]
-    name = f"tillpath_live_{uuid.uuid4().hex[:12]}"
-    _admin(base_url, f'CREATE DATABASE "{name}"')
-    url = make_url(base_url).set(database=name).render_as_string(hide_password=False)
-    try:
-        upgrade_database(url)
-        yield url
-    finally:
-        get_engine(url).dispose()
-        get_engine.cache_clear()
-        _admin(base_url, f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+    with scratch_pg_database("tillpath_live") as url:
+        try:
+            upgrade_database(url)
+            yield url
+        finally:
+            get_engine(url).dispose()
+            get_engine.cache_clear()
 
 
 def free_port() -> int:
