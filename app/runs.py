@@ -24,7 +24,13 @@ from sqlalchemy.orm import Session
 from app.errors import ConflictError, NotFoundError
 from app.models import Fix, Plan, Run
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
-from app.services import MAX_ID, ExportFile, coverage_plan_from_row, export_basename, json_ready
+from app.services import (
+    ExportFile,
+    coverage_plan_from_row,
+    export_basename,
+    json_ready,
+    read_stored,
+)
 from app.tracks import (
     ParsedTrack,
     TrackFix,
@@ -237,10 +243,7 @@ def read_run(session: Session, run_id: int) -> Run:
     NotFoundError
         If there is no such run.
     """
-    run = session.get(Run, run_id) if 1 <= run_id <= MAX_ID else None
-    if run is None:
-        raise NotFoundError("run", run_id)
-    return run
+    return read_stored(session, Run, run_id, kind="run")
 
 
 def count_fixes(session: Session, run_id: int) -> int:

@@ -14,7 +14,7 @@ import math
 import re
 import unicodedata
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Any, Final, TypeVar
 
 import numpy as np
 from shapely import Polygon
@@ -22,6 +22,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 import planner
+from app.db import Base
 from app.errors import NotFoundError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan, Simulation, utc_now
 from app.schemas import ExportFormat, PlanCreate, PlanList, PlanSummary, SimulationCreate
@@ -39,6 +40,7 @@ from planner.types import CoveragePlan, PlanStats, Waypoint
 
 #: Ids outside this range cannot exist (``plans.id`` is a 32-bit integer): 404 at once.
 MAX_ID: Final = 2**31 - 1
+RowT = TypeVar("RowT", bound=Base)
 
 #: Media type and file extension of each download.
 EXPORT_TYPES: Final[dict[str, tuple[str, str]]] = {
@@ -115,6 +117,22 @@ def plan_field(body: PlanCreate) -> Plan:
     )
 
 
+def read_stored(session: Session, model: type[RowT], ident: int, *, kind: str) -> RowT:
+    """Return the stored ``model`` row with id ``ident``.
+
+    Ids outside the 32-bit range are not looked up (PostgreSQL would fail on them).
+
+    Raises
+    ------
+    NotFoundError
+        ``<kind> <ident> not found``, if there is no such row.
+    """
+    found = session.get(model, ident) if 1 <= ident <= MAX_ID else None
+    if found is None:
+        raise NotFoundError(kind, ident)
+    return found
+
+
 def read_plan(session: Session, plan_id: int) -> Plan:
     """Return stored plan ``plan_id``.
 
@@ -123,10 +141,7 @@ def read_plan(session: Session, plan_id: int) -> Plan:
     NotFoundError
         If there is no such plan.
     """
-    plan = session.get(Plan, plan_id) if 1 <= plan_id <= MAX_ID else None
-    if plan is None:
-        raise NotFoundError("plan", plan_id)
-    return plan
+    return read_stored(session, Plan, plan_id, kind="plan")
 
 
 def list_plans(session: Session, *, limit: int, offset: int) -> PlanList:
@@ -243,10 +258,7 @@ def read_simulation(session: Session, simulation_id: int) -> Simulation:
     NotFoundError
         If there is no such simulation.
     """
-    found = session.get(Simulation, simulation_id) if 1 <= simulation_id <= MAX_ID else None
-    if found is None:
-        raise NotFoundError("simulation", simulation_id)
-    return found
+    return read_stored(session, Simulation, simulation_id, kind="simulation")
 
 
 def export_simulation_gpx(session: Session, simulation: Simulation) -> ExportFile:

@@ -11,15 +11,11 @@ export class ApiError extends Error {
   }
 }
 
-async function requestJson(url, { method = "GET", body } = {}) {
-  const options = { method, headers: { Accept: "application/json" } };
-  if (body !== undefined) {
-    options.headers["Content-Type"] = "application/json";
-    options.body = JSON.stringify(body);
-  }
+/** Send a request; answer its JSON, or throw an ApiError with the server's `detail`. */
+async function send(url, options) {
   let response;
   try {
-    response = await fetch(url, options);
+    response = await fetch(url, { ...options, headers: { Accept: "application/json", ...options.headers } });
   } catch {
     throw new ApiError(0, null);
   }
@@ -33,6 +29,11 @@ async function requestJson(url, { method = "GET", body } = {}) {
     throw new ApiError(response.status, detail);
   }
   return response.status === 204 ? null : response.json();
+}
+
+function requestJson(url, { method = "GET", body } = {}) {
+  if (body === undefined) return send(url, { method });
+  return send(url, { method, headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
 }
 
 /** Client for one tillpath server, given the URL of its plans collection. */
@@ -73,23 +74,8 @@ export class PlansApi {
   }
 }
 
-async function requestForm(url, form) {
-  let response;
-  try {
-    response = await fetch(url, { method: "POST", headers: { Accept: "application/json" }, body: form });
-  } catch {
-    throw new ApiError(0, null);
-  }
-  if (!response.ok) {
-    let detail = null;
-    try {
-      detail = (await response.json()).detail ?? null;
-    } catch {
-      // Not JSON: the status alone has to do.
-    }
-    throw new ApiError(response.status, detail);
-  }
-  return response.json();
+function requestForm(url, form) {
+  return send(url, { method: "POST", body: form });
 }
 
 /** Simulations and runs (product.md §5, §7, §8), given the API root (`…/api`). */
