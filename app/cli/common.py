@@ -5,9 +5,12 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import typer
+
+if TYPE_CHECKING:
+    from planner import CoveragePlan
 
 #: Exit status for bad input (as argparse and click use for usage errors).
 EXIT_BAD_INPUT = 2
@@ -42,3 +45,42 @@ def write_output(text: str, output: Path | None) -> None:
         output.write_text(text, encoding="utf-8")
     except OSError as exc:
         fail(f"-o: cannot write {output}: {exc.strerror or exc}")
+
+
+def plan_field_document(
+    document: Any,
+    *,
+    interval_m: float | None,
+    name_fallback: str,
+    start_lonlat: tuple[float, float] | None = None,
+    finish_lonlat: tuple[float, float] | None = None,
+    **options: Any,
+) -> tuple[CoveragePlan, str]:
+    """Plan a GeoJSON field document as the commands do; bad input fails with status 2.
+
+    The flags win over the file: ``interval_m``, ``start_lonlat`` and ``finish_lonlat`` fall
+    back to the file's ``interval_m`` property and its start/finish Points.
+
+    Returns
+    -------
+    plan : CoveragePlan
+    name : str
+        The field's name, or ``name_fallback``.
+    """
+    from planner import PlannerError, parse_field_geojson, plan_coverage
+
+    try:
+        spec = parse_field_geojson(document)
+        interval = interval_m if interval_m is not None else spec.interval_m
+        if interval is None:
+            fail("interval_m: give --interval (the field file has no interval_m property)")
+        plan = plan_coverage(
+            spec.field_lonlat,
+            interval_m=interval,
+            start_lonlat=start_lonlat or spec.start_lonlat,
+            finish_lonlat=finish_lonlat or spec.finish_lonlat,
+            **options,
+        )
+    except PlannerError as exc:
+        fail(str(exc))
+    return plan, spec.name or name_fallback

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from app.cli.common import fail, read_json_file, write_output
+from app.cli.common import fail, plan_field_document, read_json_file, write_output
 
 
 class OutputFormat(StrEnum):
@@ -79,27 +79,18 @@ def plan_command(
     ] = None,
 ) -> None:
     """Plan the back-and-forth path over FIELD; figures go to stderr, the plan to stdout or -o."""
-    from planner import PlannerError, parse_field_geojson, plan_coverage
     from planner.export import plan_to_csv, plan_to_geojson, plan_to_gpx, plan_to_waypoints_json
 
-    document = read_json_file(field, what="FIELD")
-    try:
-        spec = parse_field_geojson(document)
-        interval_m = interval if interval is not None else spec.interval_m
-        if interval_m is None:
-            fail("interval_m: give --interval (the field file has no interval_m property)")
-        plan = plan_coverage(
-            spec.field_lonlat,
-            interval_m=interval_m,
-            start_lonlat=parse_lonlat(start, option="--start") or spec.start_lonlat,
-            finish_lonlat=parse_lonlat(finish, option="--finish") or spec.finish_lonlat,
-            angle_deg=angle,
-            objective=objective.value,
-            headland_passes=headland,
-        )
-    except PlannerError as exc:
-        fail(str(exc))
-    name = spec.name or field.stem
+    plan, name = plan_field_document(
+        read_json_file(field, what="FIELD"),
+        interval_m=interval,
+        name_fallback=field.stem,
+        start_lonlat=parse_lonlat(start, option="--start"),
+        finish_lonlat=parse_lonlat(finish, option="--finish"),
+        angle_deg=angle,
+        objective=objective.value,
+        headland_passes=headland,
+    )
     if output_format is OutputFormat.geojson:
         text = json.dumps(plan_to_geojson(plan, name=name), indent=1)
     elif output_format is OutputFormat.gpx:

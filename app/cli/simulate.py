@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from app.cli.common import fail, read_json_file, write_output
+from app.cli.common import fail, plan_field_document, read_json_file, write_output
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -58,7 +58,7 @@ def _is_plan(document: Any) -> bool:
 
 def load_plan(path: Path, *, interval: float | None) -> tuple[CoveragePlan, str]:
     """Read FIELD (and plan it) or PLAN; return the plan and a name for it."""
-    from planner import PlannerError, parse_field_geojson, plan_coverage
+    from planner import PlannerError
 
     document = read_json_file(path, what="FIELD|PLAN")
     try:
@@ -69,19 +69,9 @@ def load_plan(path: Path, *, interval: float | None) -> tuple[CoveragePlan, str]
                 document.get("name") or (document.get("properties") or {}).get("name") or path.stem
             )
             return plan_from_geojson(document), name
-        spec = parse_field_geojson(document)
-        interval_m = interval if interval is not None else spec.interval_m
-        if interval_m is None:
-            fail("interval_m: give --interval (the field file has no interval_m property)")
-        plan = plan_coverage(
-            spec.field_lonlat,
-            interval_m=interval_m,
-            start_lonlat=spec.start_lonlat,
-            finish_lonlat=spec.finish_lonlat,
-        )
     except PlannerError as exc:
         fail(str(exc))
-    return plan, spec.name or path.stem
+    return plan_field_document(document, interval_m=interval, name_fallback=path.stem)
 
 
 def _value(metrics: dict[str, Any], name: str) -> float | None:
