@@ -18,7 +18,7 @@ from planner import angles, general, validation
 from planner.coverage import convex_chains, covered_area
 from planner.lines import from_sweep, scan_cell, to_sweep
 from planner.ordering import ordered_line_ends, score_headings
-from planner.projection import LocalFrame, field_frame, geodesic_area_m2
+from planner.projection import LocalFrame, field_frame
 from planner.turns import pivot_time_s
 from planner.types import (
     DEFAULT_SPEED_MPS,
@@ -95,7 +95,7 @@ def plan_coverage(
     goal = validation.validate_objective(objective)
     passes = validation.validate_headland_passes(headland_passes)
     speed = validation.validate_speed(speed_mps)
-    field_lonlat = validation.validate_field(field_lonlat)
+    field_lonlat, area_m2 = validation.validate_field(field_lonlat)
 
     frame = field_frame(field_lonlat)
     field_local = frame.to_local(field_lonlat)
@@ -120,7 +120,8 @@ def plan_coverage(
             passes=passes,
             speed_mps=speed,
             track_width_m=track_width_m,
-            started=started,
+            area_m2=area_m2,
+        started=started,
         )
 
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
@@ -152,6 +153,7 @@ def plan_coverage(
         coverage_ratio=covered / field_area_local,
         speed_mps=speed,
         track_width_m=track_width_m,
+        area_m2=area_m2,
         started=started,
     )
 
@@ -169,6 +171,7 @@ def _plan_general(
     passes: int,
     speed_mps: float,
     track_width_m: float,
+    area_m2: float,
     started: float,
 ) -> CoveragePlan:
     """Plan a non-convex field or one with holes: cells, routed moves (issue 5)."""
@@ -198,6 +201,7 @@ def _plan_general(
         coverage_ratio=plan.coverage_ratio,
         speed_mps=speed_mps,
         track_width_m=track_width_m,
+        area_m2=area_m2,
         started=started,
     )
 
@@ -262,6 +266,7 @@ def _assemble(
     coverage_ratio: float,
     speed_mps: float,
     track_width_m: float,
+    area_m2: float,
     started: float,
 ) -> CoveragePlan:
     x, y = np.asarray(route.x), np.asarray(route.y)
@@ -294,7 +299,7 @@ def _assemble(
         x, y, speed_mps=speed_mps, track_width_m=track_width_m
     )
     stats = PlanStats(
-        area_m2=round(geodesic_area_m2(field_lonlat), 2),
+        area_m2=round(area_m2, 2),
         line_count=line_count,
         waypoint_count=len(waypoints),
         working_length_m=round(lengths["line"] + lengths["headland"], 3),

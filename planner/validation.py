@@ -31,7 +31,7 @@ MAX_VERTICES = 2_000
 _WHERE = re.compile(r"\[\s*(-?[\d.eE+-]+)\s+(-?[\d.eE+-]+)\s*\]")
 
 
-def validate_field(field_lonlat: Any) -> Polygon:
+def validate_field(field_lonlat: Any) -> tuple[Polygon, float]:
     """Return ``field_lonlat`` if it is a plannable WGS84 polygon.
 
     Parameters
@@ -41,8 +41,10 @@ def validate_field(field_lonlat: Any) -> Polygon:
 
     Returns
     -------
-    Polygon
+    field : Polygon
         The same polygon, normalised (exterior counter-clockwise, holes clockwise).
+    area_m2 : float
+        Its geodesic area [m²], holes subtracted.
 
     Raises
     ------
@@ -95,7 +97,7 @@ def validate_field(field_lonlat: Any) -> Polygon:
             f"area is {area_m2 / 10_000:,.0f} ha; tillpath plans fields up to 2,000 ha at once",
         )
     # A canonical vertex order (normalize) and orientation keep plans deterministic (R7).
-    return shapely.orient_polygons(shapely.normalize(field_lonlat))
+    return shapely.orient_polygons(shapely.normalize(field_lonlat)), area_m2
 
 
 def _describe_invalid(reason: str) -> str:
