@@ -163,10 +163,13 @@ def score_headings(
     """
     d = float(interval_m)
     n_headings = len(headings_deg)
-    headings_col = np.asarray(headings_deg, dtype=float)[:, None]
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings_col)
-    ring_next = np.roll(ring_xy, -1, axis=0)
-    u2, v2 = to_sweep(ring_next[:, 0], ring_next[:, 1], headings_col)
+    m = len(ring_xy)
+    # Each edge's two ends, rotated together: columns 0..m-1 the vertices, m..2m-1 the next ones.
+    both_ends = np.concatenate([ring_xy, ring_xy[1:], ring_xy[:1]])
+    u_all, v_all = to_sweep(
+        both_ends[:, 0], both_ends[:, 1], np.asarray(headings_deg, dtype=float)[:, None]
+    )
+    u_ring, v_ring, u2, v2 = u_all[:, :m], v_all[:, :m], u_all[:, m:], v_all[:, m:]
     u_min, u_max = u_ring.min(axis=1), u_ring.max(axis=1)
     width = u_max - u_min
     n = line_counts(width, d)
@@ -224,11 +227,12 @@ def score_headings(
     holds = (c > 0) & (k1 == 0)
     v_first[:] = v_last  # with one line, the first is the last
     v_first[group[holds]] = intercept[holds] + slope[holds] * p0[a[holds]]
-    both = np.tile
-    final = np.where(both(n >= 2, 2), np.hypot(both(p_last - p_penult, 2), v_last - v_penult), 0.0)
-    final_even = both(penult % 2 == 0, 2)
-    even += np.where(final_even, final, 0.0)
-    odd += np.where(final_even, 0.0, final)
+    # The turn into the last line, per chain: rows are (lower, upper).
+    final = np.hypot(p_last - p_penult, (v_last - v_penult).reshape(2, n_headings))
+    final = np.where(n >= 2, final, 0.0)
+    final_even = penult % 2 == 0
+    even += np.where(final_even, final, 0.0).ravel()
+    odd += np.where(final_even, 0.0, final).ravel()
     total += v_last
 
     A = n_headings  # noqa: N806 - the two chains' halves
@@ -266,12 +270,12 @@ def combine_variants(
     entry_u, entry_v, exit_u, exit_v = _ends(agg)
     transit = np.zeros(turns.shape)
     theta = np.radians(agg.headings_deg)
+    cos_t, sin_t = np.cos(theta)[:, None], np.sin(theta)[:, None]
     for point, (pu_at, pv_at) in ((start_xy, (entry_u, entry_v)), (finish_xy, (exit_u, exit_v))):
-        if point is None:
-            continue
-        pu = point[0] * np.cos(theta) - point[1] * np.sin(theta)
-        pv = point[0] * np.sin(theta) + point[1] * np.cos(theta)
-        transit += np.hypot(pu_at - pu[:, None], pv_at - pv[:, None])
+        if point is not None:
+            pu = point[0] * cos_t - point[1] * sin_t
+            pv = point[0] * sin_t + point[1] * cos_t
+            transit += np.hypot(pu_at - pu, pv_at - pv)
     return VariantLengths(working=agg.working, turns=turns, transit=transit)
 
 
@@ -279,18 +283,13 @@ def _ends(agg: HeadingAggregates) -> tuple[FloatArray, FloatArray, FloatArray, F
     ends_up = (agg.counts - 1) % 2 == 0  # the last line driven runs the way the first did
     u_f, u_l = agg.u_first, agg.u_last
     lo_f, hi_f, lo_l, hi_l = agg.lo_first, agg.hi_first, agg.lo_last, agg.hi_last
+    # Variants in VARIANTS order: left_up, left_down, right_up, right_down.
     entry_u = np.stack([u_f, u_f, u_l, u_l], axis=1)
     entry_v = np.stack([lo_f, hi_f, lo_l, hi_l], axis=1)
-    exit_u = np.stack([u_l, u_l, u_f, u_f], axis=1)
-    exit_v = np.stack(
-        [
-            np.where(ends_up, hi_l, lo_l),
-            np.where(ends_up, lo_l, hi_l),
-            np.where(ends_up, hi_f, lo_f),
-            np.where(ends_up, lo_f, hi_f),
-        ],
-        axis=1,
-    )
+    exit_u = entry_u[:, ::-1]
+    same = np.stack([hi_l, lo_l, hi_f, lo_f], axis=1)  # where each exits if ends_up
+    flipped = np.stack([lo_l, hi_l, lo_f, hi_f], axis=1)
+    exit_v = np.where(ends_up[:, None], same, flipped)
     return entry_u, entry_v, exit_u, exit_v
 
 
