@@ -68,6 +68,24 @@ def line_counts(width_m: FloatArray, interval_m: float) -> IntArray:
     return np.where(width_m <= interval_m, 1, extra.astype(np.int64) + 1).astype(np.int64)
 
 
+def line_positions(u_min: float, u_max: float, interval_m: float) -> FloatArray:
+    """Positions across the sweep of a cell's lines [m] (R2, R3).
+
+    Examples
+    --------
+    >>> line_positions(0.0, 16.5, 4.0).tolist()
+    [2.0, 6.0, 10.0, 14.0, 14.5]
+    """
+    d = float(interval_m)
+    width = u_max - u_min
+    n = int(line_counts(np.array([width]), d)[0])
+    if width <= d:
+        return np.array([(u_min + u_max) / 2.0])
+    u = u_min + d / 2.0 + d * np.arange(n, dtype=float)
+    u[-1] = u_max - d / 2.0
+    return u
+
+
 @dataclass(frozen=True, slots=True)
 class LineScan:
     """The lines of one cell at many headings, as one ragged array.

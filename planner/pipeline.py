@@ -16,7 +16,7 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.coverage import convex_chains, covered_area
-from planner.lines import from_sweep, scan_cell, to_sweep
+from planner.lines import from_sweep, line_positions, to_sweep
 from planner.ordering import ordered_line_ends, score_headings
 from planner.projection import LocalFrame, field_frame
 from planner.turns import pivot_time_s
@@ -129,8 +129,12 @@ def plan_coverage(
     lengths, counts = score_headings(ring_xy, headings, interval, start_xy, finish_xy)
     best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
     heading = float(headings[best])
-    scan = scan_cell(ring_xy, headings[best : best + 1], interval)
-    u, v_lo, v_hi = scan.u, scan.v_lo, scan.v_hi
+    # One convex cell: its lines end on the chains, which coverage needs as well.
+    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
+    chains = convex_chains(u_ring, v_ring)
+    u = line_positions(chains.u_min, chains.u_max, interval)
+    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
+    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
     route = _Route()
     if start_xy is not None:
         route.add("start", None, [start_xy])
@@ -138,8 +142,6 @@ def plan_coverage(
     if finish_xy is not None:
         route.add("finish", None, [finish_xy])
 
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
-    chains = convex_chains(u_ring, v_ring)
     field_area_local = float(field_local.area)
     covered = covered_area(chains, u, v_lo, v_hi, interval)
     return _assemble(
