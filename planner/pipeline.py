@@ -121,7 +121,7 @@ def plan_coverage(
             speed_mps=speed,
             track_width_m=track_width_m,
             area_m2=area_m2,
-        started=started,
+            started=started,
         )
 
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
