@@ -16,13 +16,13 @@ import json
 import os
 import re
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
-import time
 import urllib.request
 from pathlib import Path
+
+from app.testing import running_server
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPER_FIELD = ROOT.parent / "shared" / "fields" / "paper_ketewel.geojson"
@@ -68,33 +68,6 @@ def ensure_wrk() -> str | None:
         quiet(["apt-get", "update", "-qq"])
         quiet(install)
     return shutil.which("wrk")
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def tillpath_command() -> list[str]:
-    script = Path(sys.executable).parent / "tillpath"
-    if script.exists():
-        return [str(script)]
-    return [sys.executable, "-c", "from app.cli import main; main()"]
-
-
-def wait_healthy(url: str, process: subprocess.Popen[bytes], timeout_s: float = 30) -> None:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if process.poll() is not None:
-            raise RuntimeError(f"tillpath serve exited with status {process.returncode}")
-        try:
-            with urllib.request.urlopen(f"{url}/api/health", timeout=1) as response:
-                if response.status == 200:
-                    return
-        except OSError:
-            time.sleep(0.1)
-    raise RuntimeError("tillpath serve did not answer /api/health in time")
 
 
 def post_once(url: str, body: bytes) -> dict[str, object]:
@@ -146,19 +119,7 @@ def run() -> str:
     with tempfile.TemporaryDirectory(prefix="tillpath-bench-") as tmp:
         script = Path(tmp) / "preview.lua"
         script.write_text(LUA.format(body=json.dumps(body.decode())))
-        port = free_port()
-        url = f"http://127.0.0.1:{port}"
-        env = {**os.environ, "TILLPATH_DATABASE_URL": f"sqlite:///{tmp}/bench.db"}
-        command = [*tillpath_command(), "serve", "--host", "127.0.0.1", "--port", str(port)]
-        process = subprocess.Popen(
-            [*command, "--workers", "1"],
-            cwd=ROOT,
-            env=env,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
-        try:
-            wait_healthy(url, process)
+        with running_server(f"sqlite:///{tmp}/bench.db", serve_args=["--workers", "1"]) as url:
             plan = post_once(url, body)
             stats = plan["stats"]
             assert isinstance(stats, dict) and stats["line_count"] == 4, stats
@@ -167,13 +128,6 @@ def run() -> str:
                 (label, run_wrk(wrk, url, script, threads, connections, DURATION_S))
                 for label, threads, connections in LOADS
             ]
-        finally:
-            process.terminate()
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
 
     rows = []
     for label, r in results:

@@ -18,14 +18,11 @@ import os
 import statistics
 import tempfile
 import time
-import uuid
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import shapely
-from sqlalchemy import create_engine, text
-from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session
 
 from app import runs
@@ -33,6 +30,7 @@ from app.db import make_engine, upgrade_database
 from app.models import Plan, Run
 from app.schemas import PlanCreate
 from app.services import plan_field
+from app.testing import scratch_pg_database
 from app.tracks import TrackFix
 from planner import local_frame
 
@@ -143,15 +141,6 @@ def _pg_url() -> str | None:
     return None
 
 
-def _admin(base_url: str, sql: str) -> None:
-    engine = create_engine(base_url, isolation_level="AUTOCOMMIT")
-    try:
-        with engine.connect() as conn:
-            conn.execute(text(sql))
-    finally:
-        engine.dispose()
-
-
 def run() -> str:
     """Measure on SQLite (a temporary file) and PostgreSQL (if configured); return Markdown."""
     results: dict[str, dict[str, Any]] = {}
@@ -159,13 +148,8 @@ def run() -> str:
         results["SQLite (file, WAL)"] = measure(f"sqlite:///{Path(tmp) / 'bench.db'}")
     base = _pg_url()
     if base:
-        name = f"tillpath_bench_{uuid.uuid4().hex[:10]}"
-        _admin(base, f'CREATE DATABASE "{name}"')
-        try:
-            url = make_url(base).set(database=name).render_as_string(hide_password=False)
+        with scratch_pg_database(base, prefix="tillpath_bench") as url:
             results["PostgreSQL"] = measure(url)
-        finally:
-            _admin(base, f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
 
     lines = [
         "## Field runs: load and score a 6-hour 10 Hz run",

@@ -14,33 +14,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import shutil
-import socket
-import subprocess
 import sys
 import tempfile
-import time
-import urllib.error
-import urllib.request
 from pathlib import Path
 
 from playwright.sync_api import Page, sync_playwright
 
+from app.testing import CHROMIUM_ARGS, running_server
+
 REPO = Path(__file__).resolve().parents[1]
-#: ``tillpath``'s entry point, for when the console script is not installed yet.
-ENTRY_POINT = "from app.cli import main; main()"
-NO_TILES = "http://127.0.0.1:9/{z}/{x}/{y}.png"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 #: A five-cornered sawah of about 0.26 ha beside the paper's field, with the tractor's way in
 #: and out at the road to the south.
@@ -79,63 +62,6 @@ FIELD = {
 }
 
 
-def free_port() -> int:
-    """Return a TCP port on 127.0.0.1 that nothing listens on right now."""
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port: int = sock.getsockname()[1]
-        return port
-
-
-def start_server(database: Path, port: int, log: Path) -> subprocess.Popen[bytes]:
-    """Start ``tillpath serve`` and wait until ``/api/health`` answers.
-
-    Parameters
-    ----------
-    database : Path
-        SQLite file to create.
-    port : int
-        Loopback port to serve on.
-    log : Path
-        Where the server's output goes.
-
-    Returns
-    -------
-    subprocess.Popen
-        The running server; the caller terminates it.
-    """
-    script = Path(sys.executable).with_name("tillpath")
-    command = (
-        [str(script)]
-        if script.is_file()
-        else [sys.executable, "-c", "from app.cli import main; main()"]
-    )
-    env = {
-        **os.environ,
-        "TILLPATH_DATABASE_URL": f"sqlite:///{database}",
-        "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
-        "TILLPATH_STREET_TILE_URL": NO_TILES,
-    }
-    with log.open("wb") as out:
-        process = subprocess.Popen(
-            [*command, "serve", "--host", "127.0.0.1", "--port", str(port), "--no-access-log"],
-            cwd=REPO,
-            env=env,
-            stdout=out,
-            stderr=out,
-        )
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and process.poll() is None:
-        try:
-            with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/health", timeout=2):
-                return process
-        except (urllib.error.URLError, ConnectionError, TimeoutError):
-            time.sleep(0.2)
-    process.kill()
-    process.wait()
-    raise SystemExit(f"error: tillpath serve did not start:\n{log.read_text()}")
-
-
 def make_plan(page: Page, base_url: str) -> None:
     """Import the field, plan it with a headland pass and save it, as a person would."""
     page.goto(base_url + "/")
@@ -170,22 +96,19 @@ def main() -> None:
     parser.add_argument("--height", type=int, default=760)
     args = parser.parse_args()
     chromium = shutil.which("chromium") or "/usr/bin/chromium"
-    with tempfile.TemporaryDirectory() as tmp:
-        port = free_port()
-        server = start_server(Path(tmp) / "shot.db", port, Path(tmp) / "serve.log")
-        try:
-            with sync_playwright() as playwright:
-                browser = playwright.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
-                page = browser.new_page(
-                    viewport={"width": args.width, "height": args.height}, device_scale_factor=1
-                )
-                make_plan(page, f"http://127.0.0.1:{port}")
-                args.output.parent.mkdir(parents=True, exist_ok=True)
-                page.screenshot(path=args.output)
-                browser.close()
-        finally:
-            server.terminate()
-            server.wait(timeout=10)
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        running_server(f"sqlite:///{Path(tmp) / 'shot.db'}", serve_args=["--no-access-log"]) as url,
+        sync_playwright() as playwright,
+    ):
+        browser = playwright.chromium.launch(executable_path=chromium, args=list(CHROMIUM_ARGS))
+        page = browser.new_page(
+            viewport={"width": args.width, "height": args.height}, device_scale_factor=1
+        )
+        make_plan(page, url)
+        args.output.parent.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=args.output)
+        browser.close()
     print(f"wrote {args.output}", file=sys.stderr)
 
 

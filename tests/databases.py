@@ -7,13 +7,12 @@ dropped afterwards), so tests neither see nor leave rows in the shared one.
 from __future__ import annotations
 
 import os
-import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
-from sqlalchemy import create_engine, text
-from sqlalchemy.engine import make_url
+
+from app import testing
 
 PG_URL_ENV = "TILLPATH_TEST_DATABASE_URL"
 
@@ -34,22 +33,8 @@ def pg_base_url() -> str:
     return url
 
 
-def _admin(base_url: str, sql: str) -> None:
-    engine = create_engine(base_url, isolation_level="AUTOCOMMIT")
-    try:
-        with engine.connect() as conn:
-            conn.execute(text(sql))
-    finally:
-        engine.dispose()
-
-
 @contextmanager
 def scratch_pg_database(prefix: str = "tillpath_test") -> Iterator[str]:
-    """Create an empty PostgreSQL database, yield its URL, drop it afterwards."""
-    base_url = pg_base_url()
-    name = f"{prefix}_{uuid.uuid4().hex[:12]}"
-    _admin(base_url, f'CREATE DATABASE "{name}"')
-    try:
-        yield make_url(base_url).set(database=name).render_as_string(hide_password=False)
-    finally:
-        _admin(base_url, f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+    """A throw-away database on the server CI names (see :mod:`app.testing`)."""
+    with testing.scratch_pg_database(pg_base_url(), prefix=prefix) as url:
+        yield url

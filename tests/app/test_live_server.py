@@ -7,6 +7,7 @@ sessions on a database made for the test (a SQLite file, and a PostgreSQL databa
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import subprocess
@@ -25,21 +26,11 @@ import uvicorn
 from app.db import get_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
+from tests.conftest import PAPER_FIELD
 from tests.databases import DATABASES, scratch_pg_database
 
 MAX_BODY_BYTES = 64 * 1024
-PAPER = {
-    "type": "Polygon",
-    "coordinates": [
-        [
-            [115.298, -8.6265],
-            [115.29813989, -8.62649238],
-            [115.29814712, -8.62631751],
-            [115.29800448, -8.62632237],
-            [115.298, -8.6265],
-        ]
-    ],
-}
+PAPER = json.loads(PAPER_FIELD.read_text())["features"][0]["geometry"]
 
 
 @pytest.fixture(params=DATABASES)

@@ -9,12 +9,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import socket
-import subprocess
-import sys
-import time
-import urllib.error
-import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, Protocol
@@ -22,23 +16,12 @@ from typing import Any, Protocol
 import pytest
 from playwright.sync_api import Browser, BrowserContext, Page, Playwright, Route, sync_playwright
 
-REPO = Path(__file__).resolve().parents[2]
-SHARED = REPO.parent / "shared"
+from app.testing import CHROMIUM_ARGS, running_server
+
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 PAPER_FIELD = SHARED / "fields" / "paper_ketewel.geojson"
 GPX_SCHEMA = SHARED / "schemas" / "gpx-1.1.xsd"
 
-#: Port 9 (discard) on loopback: Chromium refuses it outright, so tiles never leave the machine.
-NO_TILES = "http://127.0.0.1:9/{z}/{x}/{y}.png"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 SERVER_START_TIMEOUT_S = 60.0
 DESKTOP = {"width": 1280, "height": 800}
 
@@ -54,70 +37,16 @@ def chromium_path() -> str:
     return found
 
 
-def free_port() -> int:
-    """Return a TCP port on 127.0.0.1 that nothing listens on right now."""
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port: int = sock.getsockname()[1]
-        return port
-
-
-def tillpath_command() -> list[str]:
-    """Return the ``tillpath`` command of this virtual environment.
-
-    ``make install`` puts the console script beside the interpreter; before the project is
-    installed, the same entry point runs through the interpreter.
-    """
-    script = Path(sys.executable).with_name("tillpath")
-    if script.is_file():
-        return [str(script)]
-    return [sys.executable, "-c", "from app.cli import main; main()"]
-
-
-def wait_for_health(url: str, process: subprocess.Popen[bytes], log: Path) -> None:
-    """Poll ``url`` until it answers 200, failing if the server dies or takes too long."""
-    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
-    while time.monotonic() < deadline:
-        if process.poll() is not None:
-            pytest.fail(f"tillpath serve exited with {process.returncode}:\n{log.read_text()}")
-        try:
-            with urllib.request.urlopen(url, timeout=2) as response:
-                if response.status == 200:
-                    return
-        except (urllib.error.URLError, ConnectionError, TimeoutError):
-            pass
-        time.sleep(0.2)
-    pytest.fail(
-        f"tillpath serve did not answer {url} in {SERVER_START_TIMEOUT_S} s:\n{log.read_text()}"
-    )
-
-
 @pytest.fixture(scope="session")
 def server_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """Start ``tillpath serve`` on a fresh SQLite database; yield its base URL."""
     workdir = tmp_path_factory.mktemp("server")
-    log = workdir / "serve.log"
-    port = free_port()
-    env = {
-        **os.environ,
-        "TILLPATH_DATABASE_URL": f"sqlite:///{workdir / 't.db'}",
-        "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
-        "TILLPATH_STREET_TILE_URL": NO_TILES,
-    }
-    command = [*tillpath_command(), "serve", "--host", "127.0.0.1", "--port", str(port)]
-    with log.open("wb") as log_file:
-        process = subprocess.Popen(command, cwd=REPO, env=env, stdout=log_file, stderr=log_file)
-    base = f"http://127.0.0.1:{port}"
-    try:
-        wait_for_health(f"{base}/api/health", process, log)
+    with running_server(
+        f"sqlite:///{workdir / 't.db'}",
+        log=workdir / "serve.log",
+        timeout_s=SERVER_START_TIMEOUT_S,
+    ) as base:
         yield base
-    finally:
-        process.terminate()
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
 
 
 @pytest.fixture(scope="session")
@@ -128,7 +57,7 @@ def playwright() -> Iterator[Playwright]:
 
 @pytest.fixture(scope="session")
 def browser(playwright: Playwright) -> Iterator[Browser]:
-    browser = playwright.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
+    browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
     yield browser
     browser.close()
 

@@ -13,7 +13,8 @@ import urllib.request
 import pytest
 from playwright.sync_api import expect
 
-from tests.browser.conftest import NO_TILES, MapPageOpener
+from app.testing import NO_TILES
+from tests.browser.conftest import MapPageOpener
 
 pytestmark = pytest.mark.browser
 

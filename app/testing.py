@@ -1,0 +1,162 @@
+"""Run the real server and real databases from tests, benchmarks and scripts.
+
+The browser tests, the benchmarks and ``scripts/screenshot.py`` need the app as a user runs it
+(``tillpath serve`` on a loopback port with a database of its own and no map tiles from
+outside), and the PostgreSQL tests and benchmarks a database they may create and drop.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+import uuid
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+from sqlalchemy import create_engine, text
+from sqlalchemy.engine import make_url
+
+#: The repository root, where ``tillpath serve`` finds templates, static files and migrations.
+REPO = Path(__file__).resolve().parents[1]
+#: Port 9 (discard) on loopback: Chromium refuses it outright, so tiles never leave the machine.
+NO_TILES = "http://127.0.0.1:9/{z}/{x}/{y}.png"
+#: Debian's Chromium, headless, as root, on a machine whose only network is loopback: without
+#: the background-networking flags it keeps trying to reach Google's hosts.
+CHROMIUM_ARGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+)
+
+
+class ServerStartError(RuntimeError):
+    """``tillpath serve`` exited or did not answer ``/api/health`` in time."""
+
+
+def free_port() -> int:
+    """Return a TCP port on 127.0.0.1 that nothing listens on right now."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port: int = sock.getsockname()[1]
+        return port
+
+
+def tillpath_command() -> list[str]:
+    """Return this environment's ``tillpath`` command.
+
+    ``make install`` puts the console script beside the interpreter; before the project is
+    installed, the same entry point runs through the interpreter.
+    """
+    script = Path(sys.executable).with_name("tillpath")
+    if script.is_file():
+        return [str(script)]
+    return [sys.executable, "-c", "from app.cli import main; main()"]
+
+
+@contextmanager
+def running_server(
+    database_url: str,
+    *,
+    log: Path | None = None,
+    serve_args: Sequence[str] = (),
+    timeout_s: float = 60.0,
+) -> Iterator[str]:
+    """Serve the app with ``tillpath serve`` until the block ends; yield its base URL.
+
+    Parameters
+    ----------
+    database_url : str
+        ``TILLPATH_DATABASE_URL`` of the server (it migrates it on start).
+    log : Path, optional
+        Where the server's output goes (discarded if None).
+    serve_args : sequence of str
+        More ``tillpath serve`` options, e.g. ``("--workers", "1")``.
+    timeout_s : float
+        How long to wait for ``/api/health`` [s].
+
+    Raises
+    ------
+    ServerStartError
+        If the server exits or does not answer in time (with its log, if kept).
+    """
+    port = free_port()
+    base = f"http://127.0.0.1:{port}"
+    env = {
+        **os.environ,
+        "TILLPATH_DATABASE_URL": database_url,
+        "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
+        "TILLPATH_STREET_TILE_URL": NO_TILES,
+    }
+    command = [
+        *tillpath_command(),
+        "serve",
+        *("--host", "127.0.0.1", "--port", str(port)),
+        *serve_args,
+    ]
+    with log.open("wb") if log else open(os.devnull, "wb") as out:
+        process = subprocess.Popen(command, cwd=REPO, env=env, stdout=out, stderr=out)
+    try:
+        _wait_for_health(f"{base}/api/health", process, log, timeout_s)
+        yield base
+    finally:
+        process.terminate()
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def _wait_for_health(
+    url: str, process: subprocess.Popen[bytes], log: Path | None, timeout_s: float
+) -> None:
+    def output() -> str:
+        return log.read_text() if log else "(log discarded)"
+
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            raise ServerStartError(f"tillpath serve exited with {process.returncode}:\n{output()}")
+        try:
+            with urllib.request.urlopen(url, timeout=2) as response:
+                if response.status == 200:
+                    return
+        except (urllib.error.URLError, ConnectionError, TimeoutError):
+            pass
+        time.sleep(0.2)
+    raise ServerStartError(f"tillpath serve did not answer {url} in {timeout_s:g} s:\n{output()}")
+
+
+@contextmanager
+def scratch_pg_database(base_url: str, *, prefix: str = "tillpath_test") -> Iterator[str]:
+    """Create an empty database on the server of ``base_url``; yield its URL; drop it.
+
+    Tests and benchmarks work in a database of their own, so they neither see nor leave rows
+    in the one ``base_url`` names (``CREATE DATABASE`` rights needed).
+    """
+    name = f"{prefix}_{uuid.uuid4().hex[:12]}"
+    _admin(base_url, f'CREATE DATABASE "{name}"')
+    try:
+        yield make_url(base_url).set(database=name).render_as_string(hide_password=False)
+    finally:
+        _admin(base_url, f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+
+def _admin(base_url: str, sql: str) -> None:
+    engine = create_engine(base_url, isolation_level="AUTOCOMMIT")
+    try:
+        with engine.connect() as conn:
+            conn.execute(text(sql))
+    finally:
+        engine.dispose()

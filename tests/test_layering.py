@@ -1,0 +1,43 @@
+"""Dependencies point one way (style.md §1): ``planner`` and ``navigation`` are pure.
+
+``planner`` is geometry and ``navigation`` simulation: neither imports the web app or an I/O
+stack, nor opens files, prints or reads input; ``navigation`` may use the planner, not the
+reverse, and plots without pyplot's global state.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+IO_STACKS = {"app", "fastapi", "starlette", "sqlalchemy", "uvicorn", "requests", "httpx"}
+FORBIDDEN_IMPORTS = {"planner": IO_STACKS | {"navigation"}, "navigation": IO_STACKS}
+FORBIDDEN_CALLS = {"open", "print", "input"}
+
+MODULES = [
+    (package, path)
+    for package in FORBIDDEN_IMPORTS
+    for path in sorted((ROOT / package).rglob("*.py"))
+]
+
+
+@pytest.mark.parametrize(
+    ("package", "path"), MODULES, ids=[str(p.relative_to(ROOT)) for _, p in MODULES]
+)
+def test_pure_packages_import_no_io_layer_and_do_no_io(package: str, path: Path) -> None:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            names = [node.module or ""]
+        else:
+            names = []
+        for name in names:
+            assert name.split(".")[0] not in FORBIDDEN_IMPORTS[package], f"{path} imports {name}"
+            assert not name.startswith("matplotlib.pyplot"), f"{path} imports pyplot"
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            assert node.func.id not in FORBIDDEN_CALLS, f"{path} calls {node.func.id}()"
