@@ -13,9 +13,12 @@ from shapely import Polygon
 
 Objective = Literal["shortest_path", "fewest_lines"]
 WaypointRole = Literal["start", "line_start", "line_end", "turn", "headland", "finish"]
-SegmentKind = Literal["transit", "line", "turn", "headland"]
+SegmentKind = Literal["transit", "line", "turn", "headland", "round"]
+Pattern = Literal["boustrophedon", "snake", "spiral"]
+VehiclePreset = Literal["hand_tractor", "paper_g1000", "small_tractor", "rover"]
 
 OBJECTIVES: tuple[Objective, ...] = ("shortest_path", "fewest_lines")
+PATTERNS: tuple[Pattern, ...] = ("boustrophedon", "snake", "spiral")
 
 #: The paper's tractor (Quick G1000) works at 0.56 m/s.
 DEFAULT_SPEED_MPS = 0.56
@@ -41,6 +44,41 @@ class Machine:
     working_width_m: float
     speed_mps: float = DEFAULT_SPEED_MPS
     track_width_m: float = DEFAULT_TRACK_WIDTH_M
+
+
+@dataclass(frozen=True, slots=True)
+class Vehicle:
+    """The machine that drives the path (product.md §3a; Fields2Cover's ``Robot``).
+
+    Presets and their sources live in :mod:`planner.vehicles`; this is only the value type.
+
+    Attributes
+    ----------
+    preset : str
+        Name of the preset the figures started from (overrides may have changed them).
+    width_m : float
+        Width of the body, implement included [m]: the path buffered by half of it stays inside
+        the field (R1).
+    length_m : float
+        Length of the body, implement included [m].
+    track_m : float
+        Distance between the wheels [m]. A vehicle with ``min_turn_radius_m`` 0 pivots about one
+        stopped wheel, its axle centre on a circle of radius ``track_m / 2``.
+    min_turn_radius_m : float
+        Smallest radius the axle centre can drive [m]; 0 for a vehicle that pivots.
+    can_reverse : bool
+        Whether turns may drive backwards (Reeds–Shepp instead of Dubins).
+    turn_rate_dps : float
+        Yaw rate while turning [°/s], for time estimates and the simulator.
+    """
+
+    preset: str
+    width_m: float
+    length_m: float
+    track_m: float
+    min_turn_radius_m: float
+    can_reverse: bool
+    turn_rate_dps: float
 
 
 @dataclass(frozen=True, slots=True)
