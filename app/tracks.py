@@ -72,6 +72,11 @@ _CSV_COLUMNS: Final[dict[str, str]] = {
 }
 
 
+#: Fix qualities a track may carry (NMEA GGA 4 = rtk_fixed, 5 = rtk_float, 2 = dgps, 1 = single,
+#: 6 = dead_reckoning; RTKLIB Q 1/2/4/5 and u-blox carrier solutions map to the same names).
+FIX_QUALITIES = ("rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning")
+
+
 class TrackFormatError(ValueError):
     """A track file (or a posted fix) that cannot be read; the message names what and where.
 
@@ -103,6 +108,13 @@ class TrackFix:
         Course or heading, clockwise from true north [deg].
     speed_mps : float or None
         Speed over ground [m/s].
+    quality : str or None
+        Fix quality where the format says it: one of :data:`FIX_QUALITIES` (``rtk_fixed``,
+        ``rtk_float``, ``dgps``, ``single``, ``dead_reckoning``), else None.
+    hdop : float or None
+        Horizontal dilution of precision, where the format has it.
+    satellites : int or None
+        Satellites used in the fix, where the format has it.
     """
 
     t: int
@@ -110,6 +122,9 @@ class TrackFix:
     lon: float
     heading_deg: float | None = None
     speed_mps: float | None = None
+    quality: str | None = None
+    hdop: float | None = None
+    satellites: int | None = None
 
 
 @dataclass(frozen=True, slots=True)
