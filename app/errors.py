@@ -74,6 +74,37 @@ class ConflictError(ValueError):
     """The request does not fit the object's state (fixes posted to an uploaded run)."""
 
 
+class AccountError(ValueError):
+    """Bad account input (a name or password that cannot be used)."""
+
+
+class SignInError(PermissionError):
+    """Wrong username or password (which one is not said)."""
+
+    def __init__(self) -> None:
+        super().__init__("username or password is wrong")
+
+
+class ThrottledError(PermissionError):
+    """Too many failed sign-ins: answered with ``Retry-After``.
+
+    Parameters
+    ----------
+    what : str
+        ``this account`` or ``this address``.
+    retry_after_s : int
+        Seconds until sign-in is possible again.
+    """
+
+    def __init__(self, what: str, retry_after_s: int) -> None:
+        minutes = max(1, round(retry_after_s / 60))
+        super().__init__(
+            f"too many failed sign-ins for {what}; try again in about {minutes} minutes"
+        )
+        self.retry_after_s = retry_after_s
+        self.headers = {"Retry-After": str(retry_after_s)}
+
+
 #: The one table: exception class -> HTTP status. Looked up along the class's MRO, so a
 #: subclass without its own row gets its parent's status.
 STATUS_CODES: Final[dict[type[Exception], int]] = {
@@ -84,6 +115,9 @@ STATUS_CODES: Final[dict[type[Exception], int]] = {
     NavigationError: 422,
     TrackFormatError: 422,
     ConflictError: 409,
+    AccountError: 422,
+    SignInError: 401,
+    ThrottledError: 429,
     RequestValidationError: 422,
     NotFoundError: 404,
     BodyTooLargeError: 413,
@@ -107,7 +141,8 @@ def error_response(exc: Exception) -> JSONResponse:
         detail = format_validation_errors(exc.errors())
     else:
         detail = str(exc)
-    return JSONResponse({"detail": detail}, status_code=status_for(exc))
+    headers: dict[str, str] | None = getattr(exc, "headers", None)
+    return JSONResponse({"detail": detail}, status_code=status_for(exc), headers=headers)
 
 
 async def _handle_listed(_request: Request, exc: Exception) -> JSONResponse:

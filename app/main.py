@@ -8,7 +8,8 @@ from __future__ import annotations
 from fastapi import FastAPI
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
-from app.routers import health, pages, plans, runs, simulations
+from app.routers import auth, fields, health, pages, plans, runs, simulations
+from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
 
 API_PREFIX = "/api"
@@ -49,11 +50,17 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(simulations.router, prefix=API_PREFIX)
     app.include_router(runs.router, prefix=API_PREFIX)
     app.include_router(health.router, prefix=API_PREFIX)
+    app.include_router(auth.router, prefix=API_PREFIX)
+    app.include_router(fields.router, prefix=API_PREFIX)
     register_error_handlers(app)
     app.add_middleware(
         BodySizeLimitMiddleware,
         max_body_bytes=settings.max_body_bytes,
         upload_bytes=settings.max_upload_bytes,
+    )
+    app.add_middleware(
+        SecurityHeadersMiddleware,
+        csp=content_security_policy([settings.satellite_tile_url, settings.street_tile_url]),
     )
 
     pages.mount_pages(app)

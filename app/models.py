@@ -13,7 +13,17 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
-from sqlalchemy import JSON, BigInteger, DateTime, Dialect, Double, ForeignKey, Integer, String
+from sqlalchemy import (
+    JSON,
+    BigInteger,
+    DateTime,
+    Dialect,
+    Double,
+    ForeignKey,
+    Integer,
+    String,
+    Text,
+)
 from sqlalchemy.orm import Mapped, mapped_column
 from sqlalchemy.types import TypeDecorator
 
@@ -78,11 +88,22 @@ class Plan(Base):
         ``{"seq", "lon", "lat", "role", "line"}`` in driving order.
     geojson : dict
         The plan as a GeoJSON FeatureCollection (product.md §4).
+    organisation_id : int
+        The organisation that owns it (product.md §12).
+    field_id : int or None
+        The registry's field it was planned on; None once that field is deleted (the plan
+        keeps its own copy of the boundary in ``request``).
     """
 
     __tablename__ = "plans"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    organisation_id: Mapped[int] = mapped_column(
+        ForeignKey("organisations.id", ondelete="CASCADE"), index=True
+    )
+    field_id: Mapped[int | None] = mapped_column(
+        ForeignKey("fields.id", ondelete="SET NULL"), index=True
+    )
     name: Mapped[str | None] = mapped_column(String(PLAN_NAME_MAX_LENGTH))
     created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now, index=True)
     request: Mapped[dict[str, Any]] = mapped_column(JSON)
@@ -115,6 +136,9 @@ class Simulation(Base):
     __tablename__ = "simulations"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    organisation_id: Mapped[int] = mapped_column(
+        ForeignKey("organisations.id", ondelete="CASCADE"), index=True
+    )
     plan_id: Mapped[int] = mapped_column(ForeignKey("plans.id", ondelete="CASCADE"), index=True)
     created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
     config: Mapped[dict[str, Any]] = mapped_column(JSON)
@@ -149,6 +173,9 @@ class Run(Base):
     __tablename__ = "runs"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    organisation_id: Mapped[int] = mapped_column(
+        ForeignKey("organisations.id", ondelete="CASCADE"), index=True
+    )
     plan_id: Mapped[int] = mapped_column(ForeignKey("plans.id", ondelete="CASCADE"), index=True)
     name: Mapped[str | None] = mapped_column(String(PLAN_NAME_MAX_LENGTH))
     source: Mapped[str] = mapped_column(String(8))
@@ -186,3 +213,48 @@ class Fix(Base):
     lon: Mapped[float] = mapped_column(Double)
     heading_deg: Mapped[float | None] = mapped_column(Double)
     speed_mps: Mapped[float | None] = mapped_column(Double)
+
+
+class Field(Base):
+    """A field of the registry (product.md §12): stored once, planned many times.
+
+    Attributes
+    ----------
+    id : int
+        Primary key.
+    organisation_id : int
+        The organisation that owns it.
+    name : str
+        What the farmer calls it.
+    boundary : dict
+        GeoJSON Polygon, WGS84; holes are obstacles.
+    boundary_sha256 : str
+        SHA-256 of the boundary's canonical JSON: a plan drawn on the same boundary reuses
+        the field instead of storing a copy.
+    start, finish : list of float or None
+        ``[lon, lat]`` gates where the tractor enters and must end.
+    notes : str
+        Free text.
+    created_at, updated_at : datetime
+        UTC.
+    """
+
+    __tablename__ = "fields"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    organisation_id: Mapped[int] = mapped_column(
+        ForeignKey("organisations.id", ondelete="CASCADE"), index=True
+    )
+    name: Mapped[str] = mapped_column(String(PLAN_NAME_MAX_LENGTH))
+    boundary: Mapped[dict[str, Any]] = mapped_column(JSON)
+    boundary_sha256: Mapped[str] = mapped_column(String(64), index=True)
+    start: Mapped[list[float] | None] = mapped_column(JSON)
+    finish: Mapped[list[float] | None] = mapped_column(JSON)
+    notes: Mapped[str] = mapped_column(Text, default="")
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now, index=True)
+    updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
+
+
+# The workspace's tables (organisations, users, tokens) live in their own module; importing it
+# here registers them on Base.metadata wherever the models are loaded (Alembic, the app).
+from app import auth_models as _auth_models  # noqa: E402,F401

@@ -21,6 +21,7 @@ from sqlalchemy import func, select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
+from app.auth import Access, owned
 from app.errors import ConflictError, NotFoundError
 from app.models import Fix, Plan, Run
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
@@ -159,7 +160,11 @@ def create_run_from_track(
     Run
     """
     run = Run(
-        plan_id=plan.id, name=name, source=track.format, import_report=json_ready(track.report)
+        plan_id=plan.id,
+        organisation_id=plan.organisation_id,
+        name=name,
+        source=track.format,
+        import_report=json_ready(track.report),
     )
     _end_read_transaction(session)
     try:
@@ -175,7 +180,13 @@ def create_run_from_track(
 
 def create_live_run(session: Session, plan: Plan, *, name: str | None) -> Run:
     """Create an empty live run of ``plan`` (fixes come later) and commit."""
-    run = Run(plan_id=plan.id, name=name, source="live", import_report={})
+    run = Run(
+        plan_id=plan.id,
+        organisation_id=plan.organisation_id,
+        name=name,
+        source="live",
+        import_report={},
+    )
     session.add(run)
     session.commit()
     return run
@@ -235,15 +246,15 @@ def _end_read_transaction(session: Session) -> None:
 # --- reading -------------------------------------------------------------------------------
 
 
-def read_run(session: Session, run_id: int) -> Run:
-    """Return stored run ``run_id``.
+def read_run(session: Session, run_id: int, access: Access) -> Run:
+    """Return stored run ``run_id`` of the request's organisation.
 
     Raises
     ------
     NotFoundError
-        If there is no such run.
+        If there is no such run (or it is another organisation's).
     """
-    return read_stored(session, Run, run_id, kind="run")
+    return read_stored(session, Run, run_id, access, kind="run")
 
 
 def count_fixes(session: Session, run_id: int) -> int:
@@ -297,11 +308,12 @@ def score_run(plan: Plan, track: RunTrack, *, threshold_m: float) -> TrackMetric
     )
 
 
-def list_runs(session: Session, plan_id: int) -> RunList:
+def list_runs(session: Session, plan_id: int, access: Access) -> RunList:
     """Return ``plan_id``'s runs, newest first, with their fix counts."""
     counts = select(Fix.run_id, func.count().label("n")).group_by(Fix.run_id).subquery("counts")
     rows = session.execute(
-        select(Run, func.coalesce(counts.c.n, 0))
+        owned(Run, access)
+        .add_columns(func.coalesce(counts.c.n, 0))
         .outerjoin(counts, counts.c.run_id == Run.id)
         .where(Run.plan_id == plan_id)
         .order_by(Run.created_at.desc(), Run.id.desc())

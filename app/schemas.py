@@ -58,12 +58,20 @@ class PlanCreate(BaseModel):
         max_length=PLAN_NAME_MAX_LENGTH,
         description="Plan name; default: the field's `name` property, if any.",
     )
-    field: dict[str, Any] = Field(
+    field: dict[str, Any] | None = Field(
+        default=None,
         description=(
             "GeoJSON Polygon, Feature or one-polygon FeatureCollection, WGS84 [lon, lat]; holes "
             "are obstacles. Points with role start/finish in a FeatureCollection are used when "
-            "`start`/`finish` are absent."
-        )
+            "`start`/`finish` are absent. Give this or `field_id`."
+        ),
+    )
+    field_id: int | None = Field(
+        default=None,
+        ge=1,
+        le=2**31 - 1,
+        description="A field of the registry (`GET /api/fields`) to plan instead of `field`; "
+        "its gates are the default start and finish, its name the default plan name.",
     )
     interval_m: float = Field(description="Distance between tillage lines [m], 0.2–50.")
     start: Position | None = Field(default=None, description="[lon, lat] where the tractor enters.")
@@ -115,6 +123,7 @@ class PlanRead(BaseModel):
     id: int | None
     name: str | None
     created_at: dt.datetime | None
+    field_id: int | None = Field(default=None, description="The registry's field planned.")
     request: dict[str, Any]
     stats: PlanStatsRead
     waypoints: list[WaypointRead]
@@ -129,6 +138,7 @@ class PlanSummary(BaseModel):
     id: int
     name: str | None
     created_at: dt.datetime
+    field_id: int | None = None
     stats: PlanStatsRead
 
 

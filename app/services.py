@@ -22,8 +22,9 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 import planner
+from app import auth
+from app.auth import Access, owned, read_owned
 from app.db import Base
-from app.errors import NotFoundError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan, Simulation, utc_now
 from app.schemas import ExportFormat, PlanCreate, PlanList, PlanSummary, SimulationCreate
 from navigation import GuidanceParams, SimulationConfig, simulate
@@ -39,7 +40,7 @@ from planner.export.gpx import GpxTrack
 from planner.types import CoveragePlan, PlanStats, Waypoint
 
 #: Ids outside this range cannot exist (``plans.id`` is a 32-bit integer): 404 at once.
-MAX_ID: Final = 2**31 - 1
+MAX_ID: Final = auth.MAX_ID
 RowT = TypeVar("RowT", bound=Base)
 
 #: Media type and file extension of each download.
@@ -117,38 +118,42 @@ def plan_field(body: PlanCreate) -> Plan:
     )
 
 
-def read_stored(session: Session, model: type[RowT], ident: int, *, kind: str) -> RowT:
-    """Return the stored ``model`` row with id ``ident``.
+def read_stored(
+    session: Session, model: type[RowT], ident: int, access: Access, *, kind: str
+) -> RowT:
+    """Return the stored ``model`` row with id ``ident`` of the request's organisation.
 
     Ids outside the 32-bit range are not looked up (PostgreSQL would fail on them).
 
     Raises
     ------
     NotFoundError
-        ``<kind> <ident> not found``, if there is no such row.
+        ``<kind> <ident> not found``, if there is no such row in the organisation.
     """
-    found = session.get(model, ident) if 1 <= ident <= MAX_ID else None
-    if found is None:
-        raise NotFoundError(kind, ident)
-    return found
+    return read_owned(session, model, ident, access, kind=kind)
 
 
-def read_plan(session: Session, plan_id: int) -> Plan:
-    """Return stored plan ``plan_id``.
+def read_plan(session: Session, plan_id: int, access: Access) -> Plan:
+    """Return stored plan ``plan_id`` of the request's organisation.
 
     Raises
     ------
     NotFoundError
-        If there is no such plan.
+        If there is no such plan (or it is another organisation's).
     """
-    return read_stored(session, Plan, plan_id, kind="plan")
+    return read_stored(session, Plan, plan_id, access, kind="plan")
 
 
-def list_plans(session: Session, *, limit: int, offset: int) -> PlanList:
-    """Return a page of stored plans, newest first, without their geometry."""
-    total = session.scalar(select(func.count()).select_from(Plan)) or 0
+def list_plans(
+    session: Session, access: Access, *, limit: int, offset: int, field_id: int | None = None
+) -> PlanList:
+    """Return a page of the organisation's plans, newest first, without their geometry."""
+    query = owned(Plan, access)
+    if field_id is not None:
+        query = query.where(Plan.field_id == field_id)
+    total = session.scalar(select(func.count()).select_from(query.subquery())) or 0
     rows = session.execute(
-        select(Plan.id, Plan.name, Plan.created_at, Plan.stats)
+        query.with_only_columns(Plan.id, Plan.name, Plan.created_at, Plan.stats, Plan.field_id)
         .order_by(Plan.created_at.desc(), Plan.id.desc())
         .limit(limit)
         .offset(offset)
@@ -239,6 +244,7 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
     log = simulate(coverage_plan_from_row(plan), config, np.random.default_rng(body.seed))
     return Simulation(
         plan_id=plan.id,
+        organisation_id=plan.organisation_id,
         config={
             "seed": body.seed,
             "gps": body.gps,
@@ -250,24 +256,24 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
     )
 
 
-def read_simulation(session: Session, simulation_id: int) -> Simulation:
-    """Return stored simulation ``simulation_id``.
+def read_simulation(session: Session, simulation_id: int, access: Access) -> Simulation:
+    """Return stored simulation ``simulation_id`` of the request's organisation.
 
     Raises
     ------
     NotFoundError
-        If there is no such simulation.
+        If there is no such simulation (or it is another organisation's).
     """
-    return read_stored(session, Simulation, simulation_id, kind="simulation")
+    return read_stored(session, Simulation, simulation_id, access, kind="simulation")
 
 
-def export_simulation_gpx(session: Session, simulation: Simulation) -> ExportFile:
+def export_simulation_gpx(session: Session, simulation: Simulation, access: Access) -> ExportFile:
     """Write a stored simulation as GPX: the plan as ``<rte>``, its three tracks as ``<trk>``.
 
     The tracks are the stored ones (one vertex per second), timed from midnight UTC of the
     simulation's date, as :func:`navigation.export.simulation_to_gpx` does.
     """
-    plan = read_plan(session, simulation.plan_id)
+    plan = read_plan(session, simulation.plan_id, access)
     start = dt.datetime.combine(
         dt.date.fromisoformat(simulation.config["date"]), dt.time(0, 0), tzinfo=dt.UTC
     )

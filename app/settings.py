@@ -32,6 +32,8 @@ class Settings(BaseSettings):
     max_upload_bytes : int
         Largest track file accepted by ``POST /api/plans/{id}/runs`` [bytes] (a 6-hour u-blox
         NMEA log at 5 Hz is about 20 MB); larger ones get 413.
+    secure_cookies : bool
+        Mark the session cookie ``Secure`` (sent over HTTPS only). Turn it on behind TLS.
     """
 
     model_config = SettingsConfigDict(env_prefix="TILLPATH_", extra="ignore")
@@ -41,6 +43,7 @@ class Settings(BaseSettings):
     street_tile_url: str = OSM_TILE_URL
     max_body_bytes: int = Field(default=2 * 1024 * 1024, ge=1)
     max_upload_bytes: int = Field(default=64 * 1024 * 1024, ge=1)
+    secure_cookies: bool = False
 
 
 @lru_cache

@@ -17,6 +17,7 @@ import urllib.request
 import uuid
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 from sqlalchemy import create_engine, text
@@ -38,6 +39,77 @@ CHROMIUM_ARGS = (
     "--disable-component-update",
     "--disable-sync",
 )
+
+
+#: The first account of a server started for tests.
+TEST_USERNAME = "tester"
+TEST_PASSWORD = "tillpath test password"
+TEST_ORGANISATION = "default"
+
+
+@dataclass(frozen=True, slots=True)
+class Account:
+    """A user of a test database, with a personal API token."""
+
+    username: str
+    password: str
+    organisation_id: int
+    token: str
+
+    @property
+    def headers(self) -> dict[str, str]:
+        """``Authorization: Bearer …`` for this account."""
+        return {"Authorization": f"Bearer {self.token}"}
+
+
+class ServerUrl(str):
+    """A test server's base URL (a ``str``) that also knows its first account."""
+
+    account: Account
+
+    def __new__(cls, url: str, account: Account) -> ServerUrl:
+        """Make the URL string and attach ``account``."""
+        made = super().__new__(cls, url)
+        made.account = account
+        return made
+
+    @property
+    def headers(self) -> dict[str, str]:
+        """The first account's ``Authorization`` header."""
+        return self.account.headers
+
+
+def seed_account(
+    database_url: str,
+    *,
+    username: str = TEST_USERNAME,
+    password: str = TEST_PASSWORD,
+    organisation: str = TEST_ORGANISATION,
+    role: str = "owner",
+) -> Account:
+    """Migrate ``database_url`` and add a user with a personal token (as the CLI would).
+
+    Returns
+    -------
+    Account
+    """
+    from sqlalchemy.orm import Session
+
+    from app import accounts
+    from app.db import make_engine, upgrade_database
+
+    upgrade_database(database_url)
+    engine = make_engine(database_url)
+    try:
+        with Session(engine, expire_on_commit=False) as session:
+            user = accounts.create_user(
+                session, username, password, organisation=organisation, role=role
+            )
+            org = accounts.get_or_create_organisation(session, organisation)
+            token = accounts.create_token(session, user, name="tests").token
+            return Account(username, password, org.id, token)
+    finally:
+        engine.dispose()
 
 
 class ServerStartError(RuntimeError):
@@ -71,8 +143,11 @@ def running_server(
     log: Path | None = None,
     serve_args: Sequence[str] = (),
     timeout_s: float = 60.0,
-) -> Iterator[str]:
+) -> Iterator[ServerUrl]:
     """Serve the app with ``tillpath serve`` until the block ends; yield its base URL.
+
+    The database gets a first account (:func:`seed_account`) before the server starts; the
+    yielded URL carries it (``url.account``, ``url.headers``).
 
     Parameters
     ----------
@@ -90,8 +165,9 @@ def running_server(
     ServerStartError
         If the server exits or does not answer in time (with its log, if kept).
     """
+    account = seed_account(database_url)
     port = free_port()
-    base = f"http://127.0.0.1:{port}"
+    base = ServerUrl(f"http://127.0.0.1:{port}", account)
     env = {
         **os.environ,
         "TILLPATH_DATABASE_URL": database_url,

@@ -22,7 +22,7 @@ import tempfile
 import urllib.request
 from pathlib import Path
 
-from app.testing import running_server
+from app.testing import ServerUrl, running_server
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPER_FIELD = ROOT.parent / "shared" / "fields" / "paper_ketewel.geojson"
@@ -37,6 +37,7 @@ LUA = """
 wrk.method = "POST"
 wrk.body = {body}
 wrk.headers["Content-Type"] = "application/json"
+wrk.headers["Authorization"] = {authorization}
 
 done = function(summary, latency, requests)
   local e = summary.errors
@@ -70,10 +71,9 @@ def ensure_wrk() -> str | None:
     return shutil.which("wrk")
 
 
-def post_once(url: str, body: bytes) -> dict[str, object]:
-    request = urllib.request.Request(
-        f"{url}/api/plans/preview", data=body, headers={"Content-Type": "application/json"}
-    )
+def post_once(url: ServerUrl, body: bytes) -> dict[str, object]:
+    headers = {"Content-Type": "application/json", **url.headers}
+    request = urllib.request.Request(f"{url}/api/plans/preview", data=body, headers=headers)
     with urllib.request.urlopen(request, timeout=10) as response:
         assert response.status == 200, response.status
         plan: dict[str, object] = json.loads(response.read())
@@ -118,8 +118,11 @@ def run() -> str:
 
     with tempfile.TemporaryDirectory(prefix="tillpath-bench-") as tmp:
         script = Path(tmp) / "preview.lua"
-        script.write_text(LUA.format(body=json.dumps(body.decode())))
         with running_server(f"sqlite:///{tmp}/bench.db", serve_args=["--workers", "1"]) as url:
+            authorization = json.dumps(url.headers["Authorization"])
+            script.write_text(
+                LUA.format(body=json.dumps(body.decode()), authorization=authorization)
+            )
             plan = post_once(url, body)
             stats = plan["stats"]
             assert isinstance(stats, dict) and stats["line_count"] == 4, stats

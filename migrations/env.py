@@ -30,7 +30,30 @@ def database_url() -> str:
     return url or get_settings().database_url
 
 
+def _sqlite_foreign_keys(connection: Connection, on: bool) -> None:
+    """Turn SQLite's foreign keys off for a migration, back on after it.
+
+    Batch migrations rebuild a table by copying it and dropping the old one; with foreign keys
+    on, that DROP deletes the rows that reference it (ON DELETE CASCADE). The PRAGMA only
+    works outside a transaction, so it goes straight to the driver's connection (the app's
+    connections let SQLAlchemy emit BEGIN itself; see app.db).
+    """
+    if connection.dialect.name != "sqlite" or connection.in_transaction():
+        return
+    dbapi = connection.connection.dbapi_connection
+    assert dbapi is not None
+    dbapi.execute(f"PRAGMA foreign_keys={'ON' if on else 'OFF'}")
+
+
 def run_with(connection: Connection) -> None:
+    _sqlite_foreign_keys(connection, on=False)
+    try:
+        _run_with(connection)
+    finally:
+        _sqlite_foreign_keys(connection, on=True)
+
+
+def _run_with(connection: Connection) -> None:
     context.configure(
         connection=connection,
         target_metadata=target_metadata,

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from playwright.sync_api import Page, sync_playwright
 
-from app.testing import CHROMIUM_ARGS, running_server
+from app.testing import CHROMIUM_ARGS, TEST_PASSWORD, TEST_USERNAME, running_server
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -64,6 +64,8 @@ FIELD = {
 
 def make_plan(page: Page, base_url: str) -> None:
     """Import the field, plan it with a headland pass and save it, as a person would."""
+    login = {"username": TEST_USERNAME, "password": TEST_PASSWORD}
+    page.request.post(base_url + "/api/auth/login", data=login)
     page.goto(base_url + "/")
     page.wait_for_selector("#app[data-ready='true']")
     with page.expect_file_chooser() as chooser:

@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, FastAPI, Request
-from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
+from jinja2 import pass_context
 from starlette.routing import NoMatchFound
 
 from app.settings import Settings, get_settings
@@ -46,6 +46,26 @@ templates = Jinja2Templates(directory=TEMPLATES_DIR)
 router = APIRouter(include_in_schema=False)
 
 
+def relative_url(request: Request, name: str, /, **path_params: object) -> str:
+    """Return the path of route ``name`` (with the app's root path), never an absolute URL.
+
+    URLs in the page are paths, so the request's ``Host`` header cannot point the page's
+    scripts or API calls at another server.
+    """
+    path = request.app.url_path_for(name, **path_params)
+    return str(request.scope.get("root_path", "")).rstrip("/") + str(path)
+
+
+@pass_context
+def _template_url_for(context: dict[str, object], name: str, /, **path_params: object) -> str:
+    request = context["request"]
+    assert isinstance(request, Request)
+    return relative_url(request, name, **path_params)
+
+
+templates.env.globals["url_for"] = _template_url_for
+
+
 def _plans_api_url(request: Request) -> str:
     """Return the URL of the plans collection (``GET /api/plans``).
 
@@ -57,15 +77,15 @@ def _plans_api_url(request: Request) -> str:
     Returns
     -------
     str
-        Absolute URL; the page derives ``/preview``, ``/{id}`` and ``/{id}/export/{format}``
+        A path (no host); the page derives ``/preview``, ``/{id}`` and ``/{id}/export/{format}``
         from it.
     """
     try:
-        return str(request.url_for("list_plans"))
+        return relative_url(request, "list_plans")
     except NoMatchFound:
         # The API router names its handler ``list_plans`` (style guide); if it ever does not,
         # the documented path still works.
-        return str(request.base_url).rstrip("/") + PLANS_API_FALLBACK
+        return str(request.scope.get("root_path", "")).rstrip("/") + PLANS_API_FALLBACK
 
 
 @router.get("/docs", response_class=HTMLResponse, name="api_docs")
@@ -73,16 +93,12 @@ def api_docs(request: Request) -> HTMLResponse:
     """Swagger UI for the OpenAPI description, served from npm like the map's libraries.
 
     FastAPI's default page loads Swagger UI from a CDN, which a farm office without internet
-    cannot reach.
+    cannot reach, and starts it with an inline script, which the Content-Security-Policy
+    refuses: ``static/js/docs.js`` starts it instead.
     """
-    vendor = str(request.url_for("vendor-swagger-ui", path="")).rstrip("/")
-    return get_swagger_ui_html(
-        openapi_url=str(request.url_for("openapi")),
-        title="tillpath API",
-        swagger_js_url=f"{vendor}/swagger-ui-bundle.js",
-        swagger_css_url=f"{vendor}/swagger-ui.css",
-        swagger_favicon_url=f"{vendor}/favicon-32x32.png",
-    )
+    vendor = relative_url(request, "vendor-swagger-ui", path="").rstrip("/")
+    context = {"vendor_url": vendor, "openapi_url": relative_url(request, "openapi")}
+    return templates.TemplateResponse(request, "docs.html", context)
 
 
 @router.get("/", response_class=HTMLResponse, name="map_page")

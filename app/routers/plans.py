@@ -6,7 +6,8 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Path, Query, Response, status
 
-from app import services
+from app import fields, services
+from app.auth import Planner, Viewer
 from app.db import SessionDep
 from app.models import Plan
 from app.schemas import ErrorRead, ExportFormat, PlanCreate, PlanList, PlanRead
@@ -25,9 +26,9 @@ _TOO_LARGE: dict[int | str, dict[str, Any]] = {
 
 
 @router.post("/preview", response_model=PlanRead, responses={**_BAD_INPUT, **_TOO_LARGE})
-def preview_plan(body: PlanCreate) -> Plan:
+def preview_plan(body: PlanCreate, session: SessionDep, access: Viewer) -> Plan:
     """Plan a coverage path without storing it (``id`` and ``created_at`` are null)."""
-    return services.plan_field(body)
+    return services.plan_field(fields.resolve_plan_body(session, body, access))
 
 
 @router.post(
@@ -36,9 +37,15 @@ def preview_plan(body: PlanCreate) -> Plan:
     status_code=status.HTTP_201_CREATED,
     responses={**_BAD_INPUT, **_TOO_LARGE},
 )
-def create_plan(body: PlanCreate, session: SessionDep, response: Response) -> Plan:
-    """Plan a coverage path and store it; ``Location`` names the new plan."""
-    plan = services.plan_field(body)
+def create_plan(body: PlanCreate, session: SessionDep, access: Planner, response: Response) -> Plan:
+    """Plan a coverage path and store it; ``Location`` names the new plan.
+
+    With `field_id` the registry's field is planned; a drawn `field` creates a field in the
+    registry, or reuses the organisation's field with the same boundary.
+    """
+    resolved = fields.resolve_plan_body(session, body, access)
+    plan = services.plan_field(resolved)
+    fields.attach_field(session, plan, resolved, access)
     session.add(plan)
     session.commit()
     response.headers["Location"] = f"/api/plans/{plan.id}"
@@ -48,17 +55,21 @@ def create_plan(body: PlanCreate, session: SessionDep, response: Response) -> Pl
 @router.get("", response_model=PlanList, responses=_BAD_INPUT)
 def list_plans(
     session: SessionDep,
+    access: Viewer,
     limit: Annotated[int, Query(ge=1, le=200, description="Page size.")] = 50,
     offset: Annotated[int, Query(ge=0, le=1_000_000_000, description="Plans to skip.")] = 0,
+    field_id: Annotated[
+        int | None, Query(ge=1, le=services.MAX_ID, description="Only the plans of this field.")
+    ] = None,
 ) -> PlanList:
-    """List stored plans, newest first, with their figures but no geometry."""
-    return services.list_plans(session, limit=limit, offset=offset)
+    """List the organisation's plans, newest first, with their figures but no geometry."""
+    return services.list_plans(session, access, limit=limit, offset=offset, field_id=field_id)
 
 
 @router.get("/{plan_id}", response_model=PlanRead, responses={**_NOT_FOUND, **_BAD_INPUT})
-def read_plan(plan_id: int, session: SessionDep) -> Plan:
+def read_plan(plan_id: int, session: SessionDep, access: Viewer) -> Plan:
     """Return one stored plan with its request, figures, waypoints and GeoJSON."""
-    return services.read_plan(session, plan_id)
+    return services.read_plan(session, plan_id, access)
 
 
 @router.delete(
@@ -67,9 +78,9 @@ def read_plan(plan_id: int, session: SessionDep) -> Plan:
     response_class=Response,
     responses={**_NOT_FOUND, **_BAD_INPUT},
 )
-def delete_plan(plan_id: int, session: SessionDep) -> None:
-    """Delete a stored plan (and, later, its simulations and runs)."""
-    session.delete(services.read_plan(session, plan_id))
+def delete_plan(plan_id: int, session: SessionDep, access: Planner) -> None:
+    """Delete a stored plan with its simulations and runs."""
+    session.delete(services.read_plan(session, plan_id, access))
     session.commit()
 
 
@@ -89,9 +100,10 @@ def export_plan(
     plan_id: int,
     fmt: Annotated[ExportFormat, Path(alias="format", description="File format.")],
     session: SessionDep,
+    access: Viewer,
 ) -> Response:
     """Download a stored plan as GPX, GeoJSON, CSV or waypoints JSON."""
-    export = services.export_plan(services.read_plan(session, plan_id), fmt)
+    export = services.export_plan(services.read_plan(session, plan_id, access), fmt)
     return Response(
         content=export.content,
         media_type=export.media_type,

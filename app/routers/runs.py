@@ -7,6 +7,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, File, Form, Query, Response, UploadFile, status
 
 from app import runs, services
+from app.auth import FixPoster, Viewer, forbidden
 from app.db import SessionDep
 from app.errors import UploadTooLargeError
 from app.models import PLAN_NAME_MAX_LENGTH
@@ -50,6 +51,7 @@ def create_run(
     plan_id: int,
     session: SessionDep,
     settings: SettingsDep,
+    access: FixPoster,
     response: Response,
     file: Annotated[
         UploadFile | None,
@@ -64,9 +66,15 @@ def create_run(
 
     A multipart body with `file` uploads a track (format detected from its content). No body,
     an empty JSON object `{}` or a form without `file` creates an empty live run, to which the
-    tractor's logger then posts fixes. Nothing is stored when the file is refused.
+    tractor's logger then posts fixes. Nothing is stored when the file is refused. A device
+    token may open a live run; uploading a file needs the planner role.
     """
-    plan = services.read_plan(session, plan_id)
+    plan = services.read_plan(session, plan_id, access)
+    if file is not None and access.via == "device":
+        raise forbidden(
+            "a device token may open a live run and post fixes; uploading a "
+            "track needs the planner role"
+        )
     if file is None:
         run = runs.create_live_run(session, plan, name=(name or "").strip() or None)
     else:
@@ -84,18 +92,21 @@ def create_run(
 
 
 @router.get("/plans/{plan_id}/runs", response_model=RunList, responses={**_NOT_FOUND, **_BAD_INPUT})
-def list_runs(plan_id: int, session: SessionDep) -> RunList:
+def list_runs(plan_id: int, session: SessionDep, access: Viewer) -> RunList:
     """List a plan's runs, newest first, with their fix counts."""
-    services.read_plan(session, plan_id)
-    return runs.list_runs(session, plan_id)
+    services.read_plan(session, plan_id, access)
+    return runs.list_runs(session, plan_id, access)
 
 
 @router.get("/runs/{run_id}", response_model=RunRead, responses={**_NOT_FOUND, **_BAD_INPUT})
 def read_run(
-    run_id: int, session: SessionDep, threshold_m: ThresholdQuery = runs.DEFAULT_THRESHOLD_M
+    run_id: int,
+    session: SessionDep,
+    access: Viewer,
+    threshold_m: ThresholdQuery = runs.DEFAULT_THRESHOLD_M,
 ) -> dict[str, Any]:
     """Return a run with its metrics against the plan (as a simulation's), track and stretches."""
-    return runs.run_view(session, runs.read_run(session, run_id), threshold_m=threshold_m)
+    return runs.run_view(session, runs.read_run(session, run_id, access), threshold_m=threshold_m)
 
 
 @router.post(
@@ -103,13 +114,15 @@ def read_run(
     response_model=FixesAdded,
     responses={**_BAD_INPUT, **_NOT_FOUND, **_TOO_LARGE, **_CONFLICT},
 )
-def add_fixes(run_id: int, fixes: list[FixIn], session: SessionDep) -> FixesAdded:
+def add_fixes(
+    run_id: int, fixes: list[FixIn], session: SessionDep, access: FixPoster
+) -> FixesAdded:
     """Append a batch of fixes to a live run; idempotent per timestamp.
 
     Batches may come late, out of order or more than once: fixes are kept in time order and
     a timestamp the run already has is not stored again.
     """
-    run = runs.read_run(session, run_id)
+    run = runs.read_run(session, run_id, access)
     stored, total = runs.add_fixes(session, run, fixes)
     return FixesAdded(run_id=run.id, received=len(fixes), stored=stored, fix_count=total)
 
@@ -124,9 +137,9 @@ def add_fixes(run_id: int, fixes: list[FixIn], session: SessionDep) -> FixesAdde
         **_CONFLICT,
     },
 )
-def export_run_gpx(run_id: int, session: SessionDep) -> Response:
+def export_run_gpx(run_id: int, session: SessionDep, access: Viewer) -> Response:
     """Download a run as GPX: its fixes as a timed track, the plan as a route."""
-    export = runs.export_run_gpx(session, runs.read_run(session, run_id))
+    export = runs.export_run_gpx(session, runs.read_run(session, run_id, access))
     return Response(
         content=export.content,
         media_type=export.media_type,

@@ -7,6 +7,7 @@ from typing import Any
 from fastapi import APIRouter, Response, status
 
 from app import services
+from app.auth import Planner, Viewer
 from app.db import SessionDep
 from app.models import Simulation
 from app.schemas import ErrorRead, SimulationCreate, SimulationRead
@@ -28,13 +29,17 @@ _NOT_FOUND: dict[int | str, dict[str, Any]] = {
     responses={**_BAD_INPUT, **_NOT_FOUND},
 )
 def create_simulation(
-    plan_id: int, session: SessionDep, response: Response, body: SimulationCreate | None = None
+    plan_id: int,
+    session: SessionDep,
+    access: Planner,
+    response: Response,
+    body: SimulationCreate | None = None,
 ) -> Simulation:
     """Simulate the tractor driving a stored plan; store and return the run.
 
     The body is optional (defaults: seed 0, `m8n`, `waypoint`).
     """
-    plan = services.read_plan(session, plan_id)
+    plan = services.read_plan(session, plan_id, access)
     simulation = services.simulate_plan(plan, body or SimulationCreate())
     session.add(simulation)
     session.commit()
@@ -47,9 +52,9 @@ def create_simulation(
     response_model=SimulationRead,
     responses={**_BAD_INPUT, **_NOT_FOUND},
 )
-def read_simulation(simulation_id: int, session: SessionDep) -> Simulation:
+def read_simulation(simulation_id: int, session: SessionDep, access: Viewer) -> Simulation:
     """Return a stored simulation with its metrics and tracks."""
-    return services.read_simulation(session, simulation_id)
+    return services.read_simulation(session, simulation_id, access)
 
 
 @router.get(
@@ -61,10 +66,10 @@ def read_simulation(simulation_id: int, session: SessionDep) -> Simulation:
         **_BAD_INPUT,
     },
 )
-def export_simulation_gpx(simulation_id: int, session: SessionDep) -> Response:
+def export_simulation_gpx(simulation_id: int, session: SessionDep, access: Viewer) -> Response:
     """Download a simulation as GPX: the plan as a route, true/estimated/GPS tracks as tracks."""
-    simulation = services.read_simulation(session, simulation_id)
-    export = services.export_simulation_gpx(session, simulation)
+    simulation = services.read_simulation(session, simulation_id, access)
+    export = services.export_simulation_gpx(session, simulation, access)
     return Response(
         content=export.content,
         media_type=export.media_type,

@@ -1,6 +1,8 @@
 // The plans API (product.md §5). Every URL derives from the one the server put in the page, so
 // the page keeps working behind a proxy or under a path prefix.
 
+import { csrfHeaders } from "./account.js";
+
 /** A refused or failed request: `status` is 0 when the server could not be reached. */
 export class ApiError extends Error {
   constructor(status, detail) {
@@ -15,7 +17,12 @@ export class ApiError extends Error {
 async function send(url, options) {
   let response;
   try {
-    response = await fetch(url, { ...options, headers: { Accept: "application/json", ...options.headers } });
+    const write = (options.method ?? "GET") !== "GET" ? csrfHeaders() : {};
+    response = await fetch(url, {
+      ...options,
+      credentials: "same-origin",
+      headers: { Accept: "application/json", ...write, ...options.headers },
+    });
   } catch {
     throw new ApiError(0, null);
   }

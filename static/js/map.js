@@ -4,6 +4,7 @@
 
 /* global L */
 
+import { signIn } from "./account.js";
 import { ApiError, ChecksApi, PlansApi } from "./api.js";
 import { setUpChecks } from "./checks.js";
 import { FieldFileError, polygonOf, readFieldFile } from "./fieldfile.js";
@@ -16,6 +17,7 @@ import {
   formatPercent,
   friendlyError,
 } from "./format.js";
+import { setUpFields } from "./fields.js";
 import { drawPlan } from "./planlayer.js";
 
 /** Ketewel, Gianyar, Bali: the paper's field trial, a sensible first view for the farmers we serve. */
@@ -620,6 +622,7 @@ async function refreshSavedPlans() {
       ui.savedEmpty.textContent = `Showing the newest ${items.length} of ${total} plans.`;
     }
     markCurrentSavedPlan();
+    state.fields?.refresh(); // a saved plan may have added a field to the registry
   } catch (error) {
     showFailure(error);
   }
@@ -731,13 +734,27 @@ function wireControls() {
   state.map.on("click", onMapClick);
 }
 
-function main() {
+/** Put a field of the registry on the map, with its gates and name, ready to plan. */
+function loadRegistryField(field) {
+  endPlacing();
+  clearError();
+  state.map.pm.disableDraw();
+  const layer = fieldFromPolygon(field.boundary);
+  placeMarker("start", field.start);
+  placeMarker("finish", field.finish);
+  ui.planName.value = field.name;
+  fitMap(layer.getBounds());
+  setStatus(`${field.name}: check the interval, then press Generate path.`);
+}
+
+async function main() {
   if (!window.L?.PM) {
     ui.alert.textContent =
       "The map library is missing on the server (run `npm ci`, or `make run`, which does it).";
     return;
   }
   const dataset = ui.app.dataset;
+  await signIn(dataset.apiUrl);
   state.api = new PlansApi(dataset.plansUrl);
   state.map = createMap(dataset);
   setUpGeoman(state.map);
@@ -747,6 +764,12 @@ function main() {
     setStatus,
     showFailure,
     clearError,
+  });
+  state.fields = setUpFields({
+    map: state.map,
+    apiUrl: dataset.apiUrl,
+    loadField: loadRegistryField,
+    onPlansChanged: () => refreshSavedPlans(),
   });
   wireControls();
   setPanelOpen(false);

@@ -1,4 +1,9 @@
-"""Fixtures of the API tests: one database per kind, a rolled-back session per test, a client.
+"""Fixtures of the API tests: one database per kind, a rolled-back session per test, clients.
+
+``client`` acts as the owner of the organisation ``default`` (a personal API token), so tests
+of plans, runs and simulations need no ceremony; ``workspace`` holds the other callers of the
+access rules (viewer, planner, another organisation's owner, a device token), and
+``client_as`` makes a client for any of them (``client_as(None)``: no credentials).
 
 Every API test runs against SQLite, and again against PostgreSQL when
 ``TILLPATH_TEST_DATABASE_URL`` names a server (CI sets it). On PostgreSQL the tests make a
@@ -10,7 +15,9 @@ leave rows in the shared one. The schema is made by ``alembic upgrade head``, ne
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +29,8 @@ from sqlalchemy.orm import Session
 from sqlalchemy.pool import StaticPool
 from starlette.testclient import TestClient
 
+from app import accounts
+from app.auth_models import Membership, Organisation, User
 from app.db import alembic_config, get_session, make_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
@@ -91,10 +100,113 @@ def app(session: Session) -> Iterator[FastAPI]:
     app.dependency_overrides.clear()
 
 
+#: The password of every user of ``workspace``.
+TEST_PASSWORD = "correct horse battery staple"
+
+
+@cache
+def test_password_hash() -> str:
+    """One Argon2 hash for all test users (hashing costs ~50 ms; tests make many users)."""
+    return accounts.hash_password(TEST_PASSWORD)
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """Two organisations and a caller of each kind; ``tokens`` maps caller -> bearer token."""
+
+    organisation_id: int
+    other_organisation_id: int
+    users: dict[str, User]
+    tokens: dict[str, str]
+
+
+def add_user(session: Session, username: str, roles: dict[int, str]) -> User:
+    """Add a user with the test password and ``{organisation_id: role}`` memberships."""
+    user = User(username=username, password_hash=test_password_hash())
+    session.add(user)
+    session.flush()
+    for org_id, role in roles.items():
+        session.add(Membership(user_id=user.id, organisation_id=org_id, role=role))
+    session.commit()
+    return user
+
+
 @pytest.fixture
-def client(app: FastAPI) -> Iterator[TestClient]:
-    with TestClient(app) as client:
-        yield client
+def workspace(session: Session) -> Workspace:
+    """Organisation ``default`` (owner, planner, viewer, a device token) and ``other``."""
+    org = Organisation(name="default")
+    other = Organisation(name="other")
+    session.add_all([org, other])
+    session.flush()
+    users = {
+        "owner": add_user(session, "owner", {org.id: "owner"}),
+        "planner": add_user(session, "planner", {org.id: "planner"}),
+        "viewer": add_user(session, "viewer", {org.id: "viewer"}),
+        "other": add_user(session, "other-owner", {other.id: "owner"}),
+    }
+    tokens = {
+        name: accounts.create_token(session, user, name=f"{name} token").token
+        for name, user in users.items()
+    }
+    tokens["device"] = accounts.create_token(
+        session, users["owner"], name="tractor 1", device=True, organisation_id=org.id
+    ).token
+    return Workspace(
+        organisation_id=org.id, other_organisation_id=other.id, users=users, tokens=tokens
+    )
+
+
+ClientFactory = Callable[[str | None], TestClient]
+
+
+@pytest.fixture
+def client_as(app: FastAPI, workspace: Workspace) -> Iterator[ClientFactory]:
+    """Make a client for a caller of ``workspace`` (``None``: no credentials)."""
+    made: list[TestClient] = []
+
+    def factory(caller: str | None) -> TestClient:
+        headers = {} if caller is None else {"Authorization": f"Bearer {workspace.tokens[caller]}"}
+        client = TestClient(app, headers=headers)
+        made.append(client)
+        return client
+
+    yield factory
+    for client in made:
+        client.close()
+
+
+@pytest.fixture
+def client(client_as: ClientFactory) -> TestClient:
+    """A client acting as the owner of organisation ``default``."""
+    return client_as("owner")
+
+
+@pytest.fixture
+def anon_client(client_as: ClientFactory) -> TestClient:
+    """A client with no credentials."""
+    return client_as(None)
+
+
+@pytest.fixture
+def viewer_client(client_as: ClientFactory) -> TestClient:
+    return client_as("viewer")
+
+
+@pytest.fixture
+def planner_client(client_as: ClientFactory) -> TestClient:
+    return client_as("planner")
+
+
+@pytest.fixture
+def other_client(client_as: ClientFactory) -> TestClient:
+    """The owner of another organisation: must see nothing of ``default``."""
+    return client_as("other")
+
+
+@pytest.fixture
+def device_client(client_as: ClientFactory) -> TestClient:
+    """A device token of ``default``: may open live runs and post fixes, nothing else."""
+    return client_as("device")
 
 
 @pytest.fixture(scope="session")

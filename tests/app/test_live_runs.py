@@ -17,6 +17,7 @@ import httpx2
 from sqlalchemy import text
 
 from app.db import get_engine
+from app.testing import ServerUrl
 from tests.app.test_live_server import PAPER, database_url, server_url  # noqa: F401
 from tests.app.track_files import RUN_START, simulated_run
 
@@ -54,10 +55,10 @@ def flaky_batches(fixes: list[dict[str, Any]], rng: random.Random) -> list[list[
 
 
 def test_concurrent_retried_batches_store_each_fix_once_in_time_order(
-    server_url: str,  # noqa: F811
+    server_url: ServerUrl,  # noqa: F811
     database_url: str,  # noqa: F811
 ):
-    with httpx2.Client(base_url=server_url, timeout=60) as client:
+    with httpx2.Client(base_url=server_url, headers=server_url.headers, timeout=60) as client:
         plan = client.post("/api/plans", json={"field": PAPER, "interval_m": 4})
         assert plan.status_code == 201, plan.text
         run = client.post(f"/api/plans/{plan.json()['id']}/runs")
@@ -70,7 +71,7 @@ def test_concurrent_retried_batches_store_each_fix_once_in_time_order(
 
     def post(worker: int) -> int:
         stored = 0
-        with httpx2.Client(base_url=server_url, timeout=60) as client:
+        with httpx2.Client(base_url=server_url, headers=server_url.headers, timeout=60) as client:
             for batch in batches[worker::THREADS]:
                 response = client.post(f"/api/runs/{run_id}/fixes", json=batch)
                 assert response.status_code == 200, response.text
@@ -89,7 +90,7 @@ def test_concurrent_retried_batches_store_each_fix_once_in_time_order(
         ).one()
     assert count == distinct == N_FIXES
 
-    with httpx2.Client(base_url=server_url, timeout=60) as client:
+    with httpx2.Client(base_url=server_url, headers=server_url.headers, timeout=60) as client:
         view = client.get(f"/api/runs/{run_id}").json()
         assert view["fix_count"] == N_FIXES
         gpx = gpxpy.parse(client.get(f"/api/runs/{run_id}/export/gpx").text)

@@ -26,6 +26,7 @@ import uvicorn
 from app.db import get_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
+from app.testing import ServerUrl, seed_account
 from tests.conftest import PAPER_FIELD
 from tests.databases import DATABASES, scratch_pg_database
 
@@ -59,8 +60,12 @@ def free_port() -> int:
 
 
 @pytest.fixture
-def server_url(database_url: str) -> Iterator[str]:
-    """Serve the app with uvicorn on a loopback port, in a thread, for one test."""
+def server_url(database_url: str) -> Iterator[ServerUrl]:
+    """Serve the app with uvicorn on a loopback port, in a thread, for one test.
+
+    The database has a first account; ``server_url.headers`` authenticates as it.
+    """
+    account = seed_account(database_url)
     app = create_app(Settings(database_url=database_url, max_body_bytes=MAX_BODY_BYTES))
     port = free_port()
     config = uvicorn.Config(
@@ -74,16 +79,16 @@ def server_url(database_url: str) -> Iterator[str]:
         assert thread.is_alive() and time.monotonic() < deadline, "uvicorn did not start"
         time.sleep(0.01)
     try:
-        yield f"http://127.0.0.1:{port}"
+        yield ServerUrl(f"http://127.0.0.1:{port}", account)
     finally:
         server.should_exit = True
         thread.join(timeout=10)
 
 
-def test_fifty_plans_from_ten_threads_are_all_stored_once(server_url: str):
+def test_fifty_plans_from_ten_threads_are_all_stored_once(server_url: ServerUrl):
     def create_five(worker: int) -> list[dict[str, Any]]:
         created = []
-        with httpx2.Client(base_url=server_url, timeout=30) as client:
+        with httpx2.Client(base_url=server_url, headers=server_url.headers, timeout=30) as client:
             for i in range(5):
                 body = {"name": f"w{worker}-p{i}", "field": PAPER, "interval_m": 4}
                 response = client.post("/api/plans", json=body)
@@ -96,7 +101,7 @@ def test_fifty_plans_from_ten_threads_are_all_stored_once(server_url: str):
 
     ids = [plan["id"] for plan in results]
     assert len(ids) == 50 and len(set(ids)) == 50
-    with httpx2.Client(base_url=server_url) as client:
+    with httpx2.Client(base_url=server_url, headers=server_url.headers) as client:
         listing = client.get("/api/plans", params={"limit": 200}).json()
         assert listing["total"] == 50
         assert sorted(item["id"] for item in listing["items"]) == sorted(ids)
@@ -106,14 +111,14 @@ def test_fifty_plans_from_ten_threads_are_all_stored_once(server_url: str):
             assert client.get(f"/api/plans/{plan['id']}").json()["name"] == plan["name"]
 
 
-def test_streamed_body_over_limit_returns_413_and_stores_nothing(server_url: str):
+def test_streamed_body_over_limit_returns_413_and_stores_nothing(server_url: ServerUrl):
     def chunks() -> Iterator[bytes]:  # no Content-Length: sent chunked
         yield b'{"field": {"type": "Polygon", "coordinates": [[['
         for _ in range(MAX_BODY_BYTES // 1000 + 10):  # 1,000 bytes each
             yield b"115.298, -8.6265], [" * 50
         yield b'115.298, -8.6265]]]}, "interval_m": 4}'
 
-    with httpx2.Client(base_url=server_url, timeout=30) as client:
+    with httpx2.Client(base_url=server_url, headers=server_url.headers, timeout=30) as client:
         response = client.post(
             "/api/plans", content=chunks(), headers={"content-type": "application/json"}
         )
@@ -126,7 +131,7 @@ def test_streamed_body_over_limit_returns_413_and_stores_nothing(server_url: str
         assert client.get("/api/plans").json() == {"items": [], "total": 0}
 
 
-def test_health_pings_the_database(server_url: str):
+def test_health_pings_the_database(server_url: ServerUrl):
     response = httpx2.get(f"{server_url}/api/health")
     assert response.status_code == 200
     assert response.json() == {"status": "ok", "database": "ok"}
@@ -155,12 +160,22 @@ def test_tillpath_serve_migrates_then_serves(tmp_path: Path):
             except httpx2.TransportError:
                 time.sleep(0.1)
         assert response.json() == {"status": "ok", "database": "ok"}
-        created = httpx2.post(
-            f"http://127.0.0.1:{port}/api/plans",
-            json={"name": "served", "field": PAPER, "interval_m": 4},
-            timeout=10,
-        )
-        assert created.status_code == 201, created.text
+        base = f"http://127.0.0.1:{port}"
+        plan = {"name": "served", "field": PAPER, "interval_m": 4}
+        refused = httpx2.post(f"{base}/api/plans", json=plan, timeout=10)
+        assert refused.status_code == 401, refused.text
+        # An empty server asks for its first account; the page then works with the cookie.
+        assert httpx2.get(f"{base}/api/auth/setup").json() == {"needs_first_account": True}
+        with httpx2.Client(base_url=base, timeout=10) as browser:
+            me = browser.post(
+                "/api/auth/signup", json={"username": "first", "password": "first password"}
+            )
+            assert me.status_code == 201, me.text
+            created = browser.post(
+                "/api/plans", json=plan, headers={"X-CSRF-Token": me.json()["csrf_token"]}
+            )
+            assert created.status_code == 201, created.text
+        assert httpx2.get(f"{base}/api/auth/setup").json() == {"needs_first_account": False}
     finally:
         process.terminate()
         process.wait(timeout=10)

@@ -145,7 +145,7 @@ def test_list_plans_newest_first_with_total(client: TestClient, paper_body: dict
     listing = response.json()
     assert listing["total"] == 5
     assert [item["id"] for item in listing["items"]] == ids[::-1]
-    assert set(listing["items"][0]) == {"id", "name", "created_at", "stats"}
+    assert set(listing["items"][0]) == {"id", "name", "created_at", "field_id", "stats"}
     assert listing["items"][0]["name"] == "field 4"
 
     page = client.get("/api/plans", params={"limit": 2, "offset": 1}).json()

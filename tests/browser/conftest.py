@@ -16,7 +16,7 @@ from typing import Any, Protocol
 import pytest
 from playwright.sync_api import Browser, BrowserContext, Page, Playwright, Route, sync_playwright
 
-from app.testing import CHROMIUM_ARGS, running_server
+from app.testing import CHROMIUM_ARGS, TEST_PASSWORD, TEST_USERNAME, ServerUrl, running_server
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 PAPER_FIELD = SHARED / "fields" / "paper_ketewel.geojson"
@@ -38,8 +38,8 @@ def chromium_path() -> str:
 
 
 @pytest.fixture(scope="session")
-def server_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    """Start ``tillpath serve`` on a fresh SQLite database; yield its base URL."""
+def server_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ServerUrl]:
+    """Start ``tillpath serve`` on a fresh SQLite database with a first account; yield its URL."""
     workdir = tmp_path_factory.mktemp("server")
     with running_server(
         f"sqlite:///{workdir / 't.db'}",
@@ -84,6 +84,19 @@ def open_context(
     return context
 
 
+def sign_in(
+    context: BrowserContext,
+    server_url: str,
+    username: str = TEST_USERNAME,
+    password: str = TEST_PASSWORD,
+) -> None:
+    """Sign the context in as the page would (``POST /api/auth/login``; the cookie is kept)."""
+    response = context.request.post(
+        server_url + "/api/auth/login", data={"username": username, "password": password}
+    )
+    assert response.status == 200, response.text()
+
+
 def open_page(context: BrowserContext, server_url: str) -> Page:
     """Open the map page and wait until its script is ready."""
     page = context.new_page()
@@ -103,9 +116,15 @@ def check_clean(context: BrowserContext, pages: list[Page]) -> None:
 
 
 class MapPageOpener(Protocol):
-    """Opens the map page in a fresh browser context: ``open_map(viewport, **context_options)``."""
+    """Opens the map page in a fresh, signed-in browser context.
 
-    def __call__(self, viewport: dict[str, int] = ..., **options: Any) -> Page: ...
+    ``open_map(viewport, signed_in=True, **context_options)``; with ``signed_in=False`` the
+    page is left at its sign-in screen (not waited for as ready).
+    """
+
+    def __call__(
+        self, viewport: dict[str, int] = ..., *, signed_in: bool = ..., **options: Any
+    ) -> Page: ...
 
 
 @pytest.fixture
@@ -113,9 +132,18 @@ def open_map(browser: Browser, server_url: str) -> Iterator[MapPageOpener]:
     """Open the map page in fresh contexts; at the end, check them and close them."""
     contexts: list[BrowserContext] = []
 
-    def opener(viewport: dict[str, int] = DESKTOP, **options: Any) -> Page:
+    def opener(
+        viewport: dict[str, int] = DESKTOP, *, signed_in: bool = True, **options: Any
+    ) -> Page:
         context = open_context(browser, server_url, viewport, **options)
         contexts.append(context)
+        if not signed_in:
+            page = context.new_page()
+            page.page_errors = []  # type: ignore[attr-defined]
+            page.on("pageerror", lambda error: page.page_errors.append(str(error)))  # type: ignore[attr-defined]
+            page.goto(server_url + "/")
+            return page
+        sign_in(context, server_url)
         return open_page(context, server_url)
 
     yield opener

@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 from playwright.sync_api import Page, expect
 
+from app.testing import ServerUrl
 from tests.app.track_files import RUN_START, gpx_file, simulated_run
 from tests.browser.test_map_page import button, generate, import_paper_field, save
 
@@ -25,11 +26,10 @@ def metric(page: Page, label: str):
     return box.locator(f"xpath=.//dt[normalize-space()='{label}']/following-sibling::dd[1]")
 
 
-def api(server_url: str, method: str, path: str, body: Any = None) -> Any:
+def api(server_url: ServerUrl, method: str, path: str, body: Any = None) -> Any:
     data = None if body is None else json.dumps(body).encode()
-    request = urllib.request.Request(
-        server_url + path, data=data, method=method, headers={"Content-Type": "application/json"}
-    )
+    headers = {"Content-Type": "application/json", **server_url.headers}
+    request = urllib.request.Request(server_url + path, data=data, method=method, headers=headers)
     with urllib.request.urlopen(request, timeout=30) as response:
         return json.loads(response.read())
 
@@ -77,7 +77,7 @@ def test_upload_gpx_track_draws_the_run_with_its_metrics(page: Page, tmp_path: P
     runs = page.get_by_role("list", name="Runs of this plan")
     expect(runs.get_by_role("button", name="Open run tractor-log.gpx")).to_be_visible()
     expect(page.get_by_role("link", name="Download run GPX")).to_have_attribute(
-        "href", f"{page.url.rstrip('/')}/api/runs/{run['id']}/export/gpx"
+        "href", f"/api/runs/{run['id']}/export/gpx"
     )
 
 
@@ -92,7 +92,7 @@ def test_bad_track_file_shows_an_alert_and_no_run(page: Page, tmp_path: Path) ->
     expect(page.get_by_role("region", name="Run", exact=True)).to_be_hidden()
 
 
-def test_live_run_grows_on_the_map_while_fixes_arrive(page: Page, server_url: str) -> None:
+def test_live_run_grows_on_the_map_while_fixes_arrive(page: Page, server_url: ServerUrl) -> None:
     plan = saved_paper_plan(page)
     run = api(server_url, "POST", f"/api/plans/{plan['id']}/runs", {})
     sim = simulated_run()

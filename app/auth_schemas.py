@@ -1,0 +1,120 @@
+"""Schemas of accounts, organisations and tokens (``/api/auth``, ``/api/me``, ``/api/tokens``)."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from app.auth_models import NAME_MAX_LENGTH
+
+RoleName = Literal["viewer", "planner", "owner"]
+
+
+class LoginBody(BaseModel):
+    """Body of ``POST /api/auth/login``."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    username: str = Field(max_length=NAME_MAX_LENGTH)
+    password: str = Field(max_length=1024)
+
+
+class SignUpBody(BaseModel):
+    """Body of ``POST /api/auth/signup``: the first account of an empty server."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    username: str = Field(min_length=1, max_length=NAME_MAX_LENGTH)
+    password: str = Field(min_length=8, max_length=1024)
+    organisation: str = Field(
+        default="default",
+        min_length=1,
+        max_length=NAME_MAX_LENGTH,
+        description="Name of the first organisation (plans from before accounts go there).",
+    )
+
+
+class SetupRead(BaseModel):
+    """Answer of ``GET /api/auth/setup``: whether the server still needs its first account."""
+
+    needs_first_account: bool
+
+
+class UserRead(BaseModel):
+    """A user, without secrets."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    username: str
+
+
+class OrganisationRole(BaseModel):
+    """An organisation of the user and the user's role in it."""
+
+    id: int
+    name: str
+    role: RoleName
+
+
+class MeRead(BaseModel):
+    """Who is signed in, in which organisation, and the CSRF token of a cookie session."""
+
+    user: UserRead
+    organisation: OrganisationRole = Field(description="The organisation requests act in.")
+    organisations: list[OrganisationRole]
+    via: Literal["session", "token"]
+    csrf_token: str | None = Field(
+        default=None,
+        description="Send it as `X-CSRF-Token` with every write made with the session cookie.",
+    )
+
+
+class OrganisationChoice(BaseModel):
+    """Body of ``PUT /api/me/organisation``."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    organisation_id: int = Field(ge=1, le=2**31 - 1)
+
+
+class TokenCreate(BaseModel):
+    """Body of ``POST /api/tokens``."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(default="", max_length=NAME_MAX_LENGTH, description="A label.")
+    device: bool = Field(
+        default=False,
+        description="A device token for a tractor's logger: posts fixes to live runs of the "
+        "current organisation, nothing else (owners only).",
+    )
+
+
+class TokenRead(BaseModel):
+    """A token as listed: never the token itself."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    name: str
+    kind: Literal["personal", "device"]
+    prefix: str = Field(description="The token's first characters.")
+    organisation_id: int | None
+    created_at: dt.datetime
+    last_used_at: dt.datetime | None
+    revoked_at: dt.datetime | None
+
+
+class TokenCreated(TokenRead):
+    """A token just made: ``token`` is shown this once."""
+
+    token: str
+
+
+class TokenList(BaseModel):
+    """The tokens the user may see and revoke."""
+
+    items: list[TokenRead]
