@@ -370,6 +370,24 @@ def public() -> None:
 
 _rule(public, "public")
 
+
+def declared_rules(route: Any) -> set[str]:
+    """Return the access rules a route declares (``public``, ``user``, a role, ``fixes``).
+
+    Walks the route's dependency tree for the dependencies of this module; the access-matrix
+    test uses it so that a route that declares none fails.
+    """
+    found: set[str] = set()
+    stack = list(getattr(getattr(route, "dependant", None), "dependencies", []))
+    while stack:
+        dependant = stack.pop()
+        rule = getattr(dependant.call, "access_rule", None)
+        if rule is not None:
+            found.add(rule)
+        stack.extend(dependant.dependencies)
+    return found
+
+
 Viewer = Annotated[Access, Depends(require_role("viewer"))]
 Planner = Annotated[Access, Depends(require_role("planner"))]
 Owner = Annotated[Access, Depends(require_role("owner"))]

@@ -10,7 +10,7 @@ import sys
 
 import typer
 
-from app.cli import plan, server, simulate
+from app.cli import accounts, plan, server, simulate
 from app.cli.common import EXIT_BAD_INPUT
 
 cli = typer.Typer(
@@ -23,6 +23,7 @@ cli = typer.Typer(
 plan.register(cli)
 simulate.register(cli)
 server.register(cli)
+accounts.register(cli)
 
 
 def main() -> None:

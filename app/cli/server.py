@@ -32,6 +32,22 @@ def upgrade(url: str | None = None) -> str:
     return shown
 
 
+def _needs_first_account() -> bool:
+    """Tell whether the configured database has no user yet."""
+    from sqlalchemy.exc import SQLAlchemyError
+    from sqlalchemy.orm import Session
+
+    from app.accounts import user_count
+    from app.db import get_engine
+    from app.settings import get_settings
+
+    try:
+        with Session(get_engine(get_settings().database_url)) as session:
+            return user_count(session) == 0
+    except SQLAlchemyError:
+        return False
+
+
 def register(cli: typer.Typer) -> None:
     """Add ``serve`` and the ``db`` group to ``cli``."""
     db = typer.Typer(help="Manage the database.", no_args_is_help=True)
@@ -58,6 +74,12 @@ def register(cli: typer.Typer) -> None:
 
         shown = upgrade()
         typer.echo(f"database {shown} is up to date; serving on http://{host}:{port}", err=True)
+        if _needs_first_account():
+            typer.echo(
+                f"no account yet: open http://{host}:{port}/ to create the first one "
+                "(or run `tillpath users create NAME --password-stdin`)",
+                err=True,
+            )
         uvicorn.run(
             "app.main:create_app",
             factory=True,
