@@ -22,7 +22,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 import planner
-from app import auth
+from app import auth, budget
 from app.auth import Access, owned, read_owned
 from app.db import Base
 from app.models import PLAN_NAME_MAX_LENGTH, Plan, Simulation, utc_now
@@ -42,6 +42,8 @@ from planner.types import CoveragePlan, PlanStats, Waypoint
 #: Ids outside this range cannot exist (``plans.id`` is a 32-bit integer): 404 at once.
 MAX_ID: Final = auth.MAX_ID
 RowT = TypeVar("RowT", bound=Base)
+#: Planning budget of a large field in one request [s] (``Settings.planning_budget_s``).
+DEFAULT_PLANNING_BUDGET_S: Final = 1.5
 
 #: Media type and file extension of each download.
 EXPORT_TYPES: Final[dict[str, tuple[str, str]]] = {
@@ -61,7 +63,7 @@ class ExportFile:
     filename: str
 
 
-def plan_field(body: PlanCreate) -> Plan:
+def plan_field(body: PlanCreate, *, budget_s: float = DEFAULT_PLANNING_BUDGET_S) -> Plan:
     """Plan the request's field and return an unsaved :class:`Plan` row.
 
     Start and finish are the request's if given, else the field FeatureCollection's points
@@ -71,6 +73,8 @@ def plan_field(body: PlanCreate) -> Plan:
     ----------
     body : PlanCreate
         The validated request.
+    budget_s : float
+        Longest a large field may take to plan [s] (:mod:`app.budget`).
 
     Returns
     -------
@@ -85,8 +89,9 @@ def plan_field(body: PlanCreate) -> Plan:
     spec = planner.parse_field_geojson(body.field)
     start = _position(body.start, "start") or spec.start_lonlat
     finish = _position(body.finish, "finish") or spec.finish_lonlat
-    coverage = planner.plan_coverage(
+    coverage = budget.plan_coverage(
         spec.field_lonlat,
+        budget_s=budget_s,
         interval_m=body.interval_m,
         start_lonlat=start,
         finish_lonlat=finish,

@@ -32,6 +32,9 @@ class Settings(BaseSettings):
     max_upload_bytes : int
         Largest track file accepted by ``POST /api/plans/{id}/runs`` [bytes] (a 6-hour u-blox
         NMEA log at 5 Hz is about 20 MB); larger ones get 413.
+    planning_budget_s : float
+        Longest a large field (hundreds of vertices, many holes) may take to plan in one
+        request [s]; longer gets 422 naming the limit (:mod:`app.budget`).
     secure_cookies : bool
         Mark the session cookie ``Secure`` (sent over HTTPS only). Turn it on behind TLS.
     """
@@ -43,6 +46,7 @@ class Settings(BaseSettings):
     street_tile_url: str = OSM_TILE_URL
     max_body_bytes: int = Field(default=2 * 1024 * 1024, ge=1)
     max_upload_bytes: int = Field(default=64 * 1024 * 1024, ge=1)
+    planning_budget_s: float = Field(default=1.5, gt=0, le=600)
     secure_cookies: bool = False
 
 

@@ -167,6 +167,12 @@ def us_to_datetime(t: int) -> dt.datetime:
     return _EPOCH + dt.timedelta(microseconds=t)
 
 
+#: Longest text read as a time [characters] (ISO 8601 with nanoseconds and an offset is 35).
+MAX_TIME_TEXT_LENGTH = 64
+#: Epoch seconds of 1980–2100 have 10 digits before the point: ``Decimal.adjusted()`` ≤ 9.
+MAX_EPOCH_DIGITS = 9
+
+
 def parse_time(value: object, *, input_name: str) -> int:
     """Read a time: ISO 8601 text or Unix epoch seconds (number or numeric text).
 
@@ -199,15 +205,20 @@ def parse_time(value: object, *, input_name: str) -> int:
     if isinstance(value, (int, float)):
         if not math.isfinite(value):
             raise TrackFormatError(input_name, "must be a finite number of seconds")
-        t = int(round(Decimal(repr(value)) * 1_000_000))
+        t = _epoch_us(Decimal(repr(value)), input_name)
     elif isinstance(value, str):
         text = value.strip()
+        if len(text) > MAX_TIME_TEXT_LENGTH:
+            raise TrackFormatError(
+                input_name,
+                f"is {len(text)} characters long; a time has at most {MAX_TIME_TEXT_LENGTH}",
+            )
+        number: Decimal | None
         try:
             number = Decimal(text)
-            if not number.is_finite():
-                raise TrackFormatError(input_name, "must be a finite number of seconds")
-            t = int(round(number * 1_000_000))
-        except (InvalidOperation, ValueError):
+        except InvalidOperation:
+            number = None
+        if number is None:
             try:
                 t = datetime_to_us(dt.datetime.fromisoformat(text))
             except ValueError:
@@ -215,11 +226,26 @@ def parse_time(value: object, *, input_name: str) -> int:
                     input_name,
                     f"{text[:40]!r} is neither an ISO 8601 time nor Unix epoch seconds",
                 ) from None
+        else:
+            t = _epoch_us(number, input_name)
     else:
         raise TrackFormatError(input_name, "must be an ISO 8601 time or Unix epoch seconds")
     if not MIN_TIME_US <= t <= MAX_TIME_US:
         raise TrackFormatError(input_name, "must lie between 1980 and 2100")
     return t
+
+
+def _epoch_us(seconds: Decimal, input_name: str) -> int:
+    """Return epoch ``seconds`` in µs, refusing what lies far outside 1980–2100 at once.
+
+    The exponent is looked at before the number becomes an integer, which costs time in
+    proportion to its digits (``1e999990`` has a million of them).
+    """
+    if not seconds.is_finite():
+        raise TrackFormatError(input_name, "must be a finite number of seconds")
+    if seconds and seconds.adjusted() > MAX_EPOCH_DIGITS:
+        raise TrackFormatError(input_name, "must lie between 1980 and 2100")
+    return int(round(seconds * 1_000_000))
 
 
 def check_position(lat: float, lon: float, *, input_name: str) -> None:

@@ -4,15 +4,17 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Query, Response, status
+from fastapi import APIRouter, Depends, Path, Query, Response, status
 
 from app import fields, services
 from app.auth import Planner, Viewer
 from app.db import SessionDep
 from app.models import Plan
 from app.schemas import ErrorRead, ExportFormat, PlanCreate, PlanList, PlanRead
+from app.settings import Settings, get_settings
 
 router = APIRouter(prefix="/plans", tags=["plans"])
+SettingsDep = Annotated[Settings, Depends(get_settings)]
 
 _BAD_INPUT: dict[int | str, dict[str, Any]] = {
     422: {"model": ErrorRead, "description": "The input named in `detail` is wrong"}
@@ -26,9 +28,12 @@ _TOO_LARGE: dict[int | str, dict[str, Any]] = {
 
 
 @router.post("/preview", response_model=PlanRead, responses={**_BAD_INPUT, **_TOO_LARGE})
-def preview_plan(body: PlanCreate, session: SessionDep, access: Viewer) -> Plan:
+def preview_plan(
+    body: PlanCreate, session: SessionDep, access: Viewer, settings: SettingsDep
+) -> Plan:
     """Plan a coverage path without storing it (``id`` and ``created_at`` are null)."""
-    return services.plan_field(fields.resolve_plan_body(session, body, access))
+    resolved = fields.resolve_plan_body(session, body, access)
+    return services.plan_field(resolved, budget_s=settings.planning_budget_s)
 
 
 @router.post(
@@ -37,14 +42,20 @@ def preview_plan(body: PlanCreate, session: SessionDep, access: Viewer) -> Plan:
     status_code=status.HTTP_201_CREATED,
     responses={**_BAD_INPUT, **_TOO_LARGE},
 )
-def create_plan(body: PlanCreate, session: SessionDep, access: Planner, response: Response) -> Plan:
+def create_plan(
+    body: PlanCreate,
+    session: SessionDep,
+    access: Planner,
+    settings: SettingsDep,
+    response: Response,
+) -> Plan:
     """Plan a coverage path and store it; ``Location`` names the new plan.
 
     With `field_id` the registry's field is planned; a drawn `field` creates a field in the
     registry, or reuses the organisation's field with the same boundary.
     """
     resolved = fields.resolve_plan_body(session, body, access)
-    plan = services.plan_field(resolved)
+    plan = services.plan_field(resolved, budget_s=settings.planning_budget_s)
     fields.attach_field(session, plan, resolved, access)
     session.add(plan)
     session.commit()

@@ -1,0 +1,120 @@
+"""A planning budget per request: no field can hold a worker (product.md §12, "Hardening").
+
+Plain fields (the real ones have at most a few hundred vertices) are planned in the request's
+thread, as fast as ever. A field past :data:`INLINE_MAX_VERTICES` vertices or
+:data:`INLINE_MAX_HOLES` holes is planned in a child process (multiprocessing's
+``forkserver``, which forks from a clean process that has the planner imported) with a
+deadline: a plan that would take longer than ``Settings.planning_budget_s`` is stopped and
+answered 422, naming the limit. The command line (``tillpath plan``) has no budget.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import multiprocessing.connection
+import time
+from typing import Any, Final
+
+from shapely import Polygon
+
+import planner
+from planner import CoveragePlan, PlannerError
+
+#: Fields up to this many vertices (exterior and holes) are planned in the request's thread.
+INLINE_MAX_VERTICES: Final = 400
+#: Fields with up to this many holes are planned in the request's thread.
+INLINE_MAX_HOLES: Final = 10
+
+_context = multiprocessing.get_context("forkserver")
+_context.set_forkserver_preload(["planner"])
+
+
+class PlanningBudgetError(PlannerError):
+    """Planning the field would take longer than the budget of one request.
+
+    Parameters
+    ----------
+    budget_s : float
+        The budget [s].
+    vertices, holes : int
+        The field's size, named in the message.
+    """
+
+    def __init__(self, budget_s: float, vertices: int, holes: int) -> None:
+        super().__init__(
+            "field",
+            f"planning this field ({vertices:,} vertices, {holes} holes) takes longer than "
+            f"the limit of {budget_s:g} s per request; simplify the boundary, or plan it "
+            "with `tillpath plan`",
+        )
+
+
+def field_size(field: Polygon) -> tuple[int, int]:
+    """Return ``(vertices, holes)`` of a polygon (closing vertices not counted)."""
+    rings = [field.exterior, *field.interiors]
+    return sum(max(len(r.coords) - 1, 0) for r in rings), len(field.interiors)
+
+
+def _worker(conn: multiprocessing.connection.Connection, field: Polygon, options: Any) -> None:
+    try:
+        result: tuple[str, Any] = ("ok", planner.plan_coverage(field, **options))
+    except PlannerError as exc:
+        result = ("refused", (type(exc).__name__, str(exc)))
+    except Exception as exc:  # noqa: BLE001 - reported to the parent, which re-raises
+        result = ("failed", f"{type(exc).__name__}: {exc}")
+    conn.send(result)
+    conn.close()
+
+
+class ChildPlannerError(PlannerError):
+    """A planner error from the child process, with the child's message."""
+
+    def __init__(self, message: str) -> None:
+        ValueError.__init__(self, message)
+
+
+def plan_coverage(field_lonlat: Polygon, *, budget_s: float, **options: Any) -> CoveragePlan:
+    """Plan like :func:`planner.plan_coverage`, within ``budget_s`` for large fields.
+
+    Parameters
+    ----------
+    field_lonlat : Polygon
+        The field, WGS84.
+    budget_s : float
+        Longest a large field may take [s].
+    **options
+        Passed to :func:`planner.plan_coverage`.
+
+    Raises
+    ------
+    PlanningBudgetError
+        If a large field is not planned within the budget.
+    PlannerError
+        What the planner refuses, with its message.
+    """
+    vertices, holes = field_size(field_lonlat)
+    if vertices <= INLINE_MAX_VERTICES and holes <= INLINE_MAX_HOLES:
+        return planner.plan_coverage(field_lonlat, **options)
+    deadline = time.monotonic() + budget_s  # the process's start counts against the budget
+    receiver, sender = _context.Pipe(duplex=False)
+    process = _context.Process(target=_worker, args=(sender, field_lonlat, options), daemon=True)
+    process.start()
+    sender.close()
+    try:
+        if not receiver.poll(max(0.0, deadline - time.monotonic())):
+            raise PlanningBudgetError(budget_s, vertices, holes)
+        kind, value = receiver.recv()
+    except EOFError:
+        raise RuntimeError("the planning process ended without an answer") from None
+    finally:
+        receiver.close()
+        if process.is_alive():
+            process.kill()
+        process.join()
+        process.close()
+    if kind == "ok":
+        plan: CoveragePlan = value
+        return plan
+    if kind == "refused":
+        raise ChildPlannerError(value[1])
+    raise RuntimeError(f"planning failed: {value}")
