@@ -36,3 +36,34 @@ class InvalidParameterError(PlannerError):
 
 class PlanTooLargeError(PlannerError):
     """The plan would exceed the line limit; refused before any work is done."""
+
+
+class UnreadableFileError(PlannerError):
+    """A file that cannot be read: unknown or binary, malformed, or refused for safety.
+
+    ``input_name`` is the file's name, so the message says which file and what was wrong.
+    """
+
+
+class FieldChoiceError(InvalidFieldError):
+    """A file holds several fields and none (or no known one) was chosen.
+
+    Parameters
+    ----------
+    input_name : str
+        The file's name.
+    problem : str
+        What is wrong, in plain words.
+    choices : list of tuple
+        ``(index, feature_id, name, area_m2)`` of every field in the file, so a caller can
+        list them (the CLI prints them; the page shows them on the map).
+    """
+
+    def __init__(
+        self,
+        input_name: str,
+        problem: str,
+        choices: list[tuple[int, str | None, str | None, float]],
+    ) -> None:
+        super().__init__(input_name, problem)
+        self.choices = choices

@@ -31,6 +31,9 @@ class FieldSpec:
         The field's ``interval_m`` property, if present.
     name : str or None
         The field's ``name`` or ``id`` property, or the collection's ``name``.
+    feature_id : str or None
+        The feature's ``id`` (property or GeoJSON Feature ``id``), in a file of many fields;
+        a MultiPolygon's parts get ``<id>.1``, ``<id>.2`` ….
     """
 
     field_lonlat: Polygon
@@ -38,6 +41,7 @@ class FieldSpec:
     finish_lonlat: tuple[float, float] | None = None
     interval_m: float | None = None
     name: str | None = None
+    feature_id: str | None = None
 
 
 def parse_position(value: Any, *, input_name: str) -> tuple[float, float]:
@@ -99,6 +103,93 @@ def parse_field_geojson(obj: Any) -> FieldSpec:
             name=_name_property(props),
         )
     return FieldSpec(field_lonlat=_polygon_from_geometry(obj))
+
+
+def parse_fields_geojson(obj: Any) -> list[FieldSpec]:
+    """Extract every field of a GeoJSON object: each Polygon, and each part of a MultiPolygon.
+
+    Points with ``role`` ``start``/``finish`` apply to every field. A one-field collection's
+    field falls back on the collection's ``name``.
+
+    Parameters
+    ----------
+    obj : dict
+        Parsed GeoJSON: a geometry, a Feature or a FeatureCollection.
+
+    Returns
+    -------
+    list of FieldSpec
+        At least one, in file order.
+
+    Raises
+    ------
+    InvalidFieldError
+        If there is no polygon, or a polygon's coordinates are malformed.
+
+    Examples
+    --------
+    >>> ring = [[0, 0], [0.001, 0], [0.001, 0.001], [0, 0]]
+    >>> multi = {"type": "MultiPolygon", "coordinates": [[ring], [ring]]}
+    >>> feature = {"type": "Feature", "properties": {"id": "a"}, "geometry": multi}
+    >>> [f.feature_id for f in parse_fields_geojson(feature)]
+    ['a.1', 'a.2']
+    """
+    if not isinstance(obj, Mapping):
+        raise InvalidFieldError("field", "must be a GeoJSON object")
+    kind = obj.get("type")
+    if kind == "FeatureCollection":
+        features = obj.get("features")
+        if not isinstance(features, list):
+            raise InvalidFieldError("field", "FeatureCollection has no 'features' list")
+    elif kind == "Feature":
+        features = [obj]
+    else:
+        features = [{"type": "Feature", "properties": {}, "geometry": obj}]
+    found: list[tuple[Polygon, Mapping[str, Any], str | None]] = []
+    points: dict[str, tuple[float, float]] = {}
+    for feature in features:
+        if not isinstance(feature, Mapping):
+            raise InvalidFieldError("field", "every feature must be a GeoJSON Feature object")
+        geometry = feature.get("geometry") or {}
+        props = _properties(feature)
+        gtype = geometry.get("type") if isinstance(geometry, Mapping) else None
+        ident = props.get("id", feature.get("id"))
+        feature_id = None if ident in (None, "") else str(ident)
+        if gtype == "Polygon":
+            found.append((_polygon_from_geometry(geometry), props, feature_id))
+        elif gtype == "MultiPolygon":
+            parts = geometry.get("coordinates")
+            if not isinstance(parts, list) or not parts:
+                raise InvalidFieldError("field", "a MultiPolygon has no polygons")
+            for k, part in enumerate(parts, start=1):
+                polygon = _polygon_from_geometry({"type": "Polygon", "coordinates": part})
+                if len(parts) == 1:
+                    found.append((polygon, props, feature_id))
+                else:
+                    name = _name_property(props)
+                    part_props = {
+                        **props,
+                        "name": f"{name} ({k} of {len(parts)})" if name else None,
+                    }
+                    part_id = f"{feature_id}.{k}" if feature_id else None
+                    found.append((polygon, {**part_props, "id": part_id}, part_id))
+        elif gtype == "Point" and props.get("role") in ("start", "finish"):
+            role = str(props["role"])
+            points[role] = parse_position(geometry.get("coordinates"), input_name=role)
+    if not found:
+        raise InvalidFieldError("field", "the file holds no Polygon")
+    collection_name = str(obj["name"]) if kind == "FeatureCollection" and obj.get("name") else None
+    return [
+        FieldSpec(
+            field_lonlat=polygon,
+            start_lonlat=points.get("start"),
+            finish_lonlat=points.get("finish"),
+            interval_m=_interval_property(props),
+            name=_name_property(props) or (collection_name if len(found) == 1 else None),
+            feature_id=feature_id,
+        )
+        for polygon, props, feature_id in found
+    ]
 
 
 def _from_collection(obj: Mapping[str, Any]) -> FieldSpec:

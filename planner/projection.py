@@ -192,3 +192,51 @@ def geodesic_area_m2(polygon_lonlat: BaseGeometry) -> float:
     """
     area, _ = WGS84.geometry_area_perimeter(shapely.orient_polygons(polygon_lonlat))
     return abs(float(area))
+
+
+@lru_cache(maxsize=16)
+def _to_lonlat_transformer(crs: str) -> Transformer:
+    return Transformer.from_crs(crs, "EPSG:4326", always_xy=True)
+
+
+def reproject_to_lonlat(geometry: GeometryT, crs: str) -> GeometryT:
+    """Return ``geometry`` from the CRS ``crs`` (WKT, ``EPSG:n`` …) in WGS84 ``(lon, lat)``.
+
+    The import readers call this for files that declare another CRS (a Shapefile's ``.prj``,
+    a GeoPackage layer's SRS). One cached ``Transformer`` per CRS.
+
+    Raises
+    ------
+    InvalidFieldError
+        If ``crs`` is not a CRS pyproj knows, or a coordinate does not transform.
+    """
+    from pyproj.exceptions import CRSError
+
+    try:
+        transformer = _to_lonlat_transformer(crs)
+    except CRSError as exc:
+        raise InvalidFieldError("crs", f"is not a coordinate system pyproj knows ({exc})") from None
+    result = shapely.transform(
+        geometry,
+        transformer.transform,  # type: ignore[arg-type]
+        interleaved=False,
+    )
+    if not np.isfinite(shapely.get_coordinates(result)).all():
+        raise InvalidFieldError("crs", "some coordinates do not transform to longitude/latitude")
+    return result
+
+
+def is_lonlat_crs(crs: str | None) -> bool:
+    """Tell whether ``crs`` is WGS84 longitude/latitude (None counts as WGS84, as in GeoJSON).
+
+    Examples
+    --------
+    >>> is_lonlat_crs("EPSG:4326"), is_lonlat_crs("OGC:CRS84"), is_lonlat_crs("EPSG:32750")
+    (True, True, False)
+    """
+    if crs is None:
+        return True
+    text = crs.strip().upper()
+    return text in ("EPSG:4326", "OGC:CRS84", "CRS84", "URN:OGC:DEF:CRS:OGC:1.3:CRS84") or (
+        text.startswith("URN:OGC:DEF:CRS:EPSG:") and text.endswith(":4326")
+    )
