@@ -8,7 +8,7 @@ from __future__ import annotations
 from fastapi import FastAPI
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
-from app.routers import auth, fields, health, pages, plans, runs, simulations
+from app.routers import auth, field_files, fields, health, pages, plans, runs, simulations
 from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
 
@@ -49,6 +49,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(plans.router, prefix=API_PREFIX)
     app.include_router(simulations.router, prefix=API_PREFIX)
     app.include_router(runs.router, prefix=API_PREFIX)
+    app.include_router(field_files.router, prefix=API_PREFIX)
     app.include_router(health.router, prefix=API_PREFIX)
     app.include_router(auth.router, prefix=API_PREFIX)
     app.include_router(fields.router, prefix=API_PREFIX)

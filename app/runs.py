@@ -26,6 +26,7 @@ from app.errors import ConflictError, NotFoundError
 from app.models import Fix, Plan, Run
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
 from app.services import (
+    EXPORT_TYPES,
     ExportFile,
     coverage_plan_from_row,
     export_basename,
@@ -42,6 +43,7 @@ from app.tracks import (
 )
 from navigation import TrackMetrics, score_track
 from planner.export.gpx import GpxTrack, plan_to_gpx
+from planner.export.kml import plan_to_kml
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -426,6 +428,17 @@ def export_run_gpx(session: Session, run: Run) -> ExportFile:
     TrackFormatError
         If the run has no fix yet (a new live run): there is no track to write.
     """
+    return export_run_track(session, run, "gpx")
+
+
+def export_run_track(session: Session, run: Run, fmt: str) -> ExportFile:
+    """Write a run as ``gpx`` or ``kml`` (the fixes as a ``gx:Track``), the plan with it.
+
+    Raises
+    ------
+    ConflictError
+        If the run has no fix yet.
+    """
     plan = session.get(Plan, run.plan_id)
     if plan is None:
         raise NotFoundError("run", run.id)
@@ -434,10 +447,11 @@ def export_run_gpx(session: Session, run: Run) -> ExportFile:
         raise ConflictError(f"run {run.id}: has no fix yet; there is no track to export")
     times = [us_to_datetime(int(t)) for t in track.t]
     title = run.name or f"run {run.id}"
-    content = plan_to_gpx(
+    writer = plan_to_kml if fmt == "kml" else plan_to_gpx
+    content = writer(
         coverage_plan_from_row(plan),
         name=f"{plan.name or f'plan {plan.id}'}: {title}",
         tracks=[GpxTrack(name=title, lon=track.lon.tolist(), lat=track.lat.tolist(), time=times)],
     )
-    filename = f"{export_basename(plan)}-run-{run.id}.gpx"
-    return ExportFile(content=content, media_type="application/gpx+xml", filename=filename)
+    filename = f"{export_basename(plan)}-run-{run.id}.{fmt}"
+    return ExportFile(content=content, media_type=EXPORT_TYPES[fmt][0], filename=filename)

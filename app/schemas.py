@@ -15,7 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from app.models import PLAN_NAME_MAX_LENGTH
 
 Objective = Literal["shortest_path", "fewest_lines"]
-ExportFormat = Literal["gpx", "geojson", "csv", "json"]
+ExportFormat = Literal["gpx", "geojson", "csv", "json", "kml", "waypoints", "plan", "gpkg"]
 
 #: Largest page of ``GET /api/plans``.
 MAX_PAGE_SIZE = 200

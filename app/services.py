@@ -33,7 +33,11 @@ from planner.export import (
     plan_from_geojson,
     plan_to_csv,
     plan_to_geojson,
+    plan_to_gpkg,
     plan_to_gpx,
+    plan_to_kml,
+    plan_to_qgc_plan,
+    plan_to_qgc_wpl,
     plan_to_waypoints_json,
 )
 from planner.export.gpx import GpxTrack
@@ -51,14 +55,18 @@ EXPORT_TYPES: Final[dict[str, tuple[str, str]]] = {
     "geojson": ("application/geo+json", "geojson"),
     "csv": ("text/csv; charset=utf-8", "csv"),
     "json": ("application/json", "json"),
+    "kml": ("application/vnd.google-earth.kml+xml", "kml"),
+    "waypoints": ("text/plain; charset=utf-8", "waypoints"),
+    "plan": ("application/json", "plan"),
+    "gpkg": ("application/geopackage+sqlite3", "gpkg"),
 }
 
 
 @dataclass(frozen=True, slots=True)
 class ExportFile:
-    """A download: its text, media type and file name."""
+    """A download: its text (or bytes, for a GeoPackage), media type and file name."""
 
-    content: str
+    content: str | bytes
     media_type: str
     filename: str
 
@@ -169,19 +177,31 @@ def list_plans(
 def export_plan(plan: Plan, fmt: ExportFormat) -> ExportFile:
     """Write stored ``plan`` as a download in format ``fmt``.
 
-    GeoJSON is the stored collection itself; GPX, CSV and waypoints JSON come from the
-    planner's writers, fed with the stored plan (no re-planning).
+    GeoJSON is the stored collection itself; the other formats come from the planner's
+    writers, fed with the stored plan (no re-planning). The missions (``waypoints``,
+    ``plan``) set the speed the plan was made for.
     """
     media_type, extension = EXPORT_TYPES[fmt]
     filename = f"{export_basename(plan)}.{extension}"
+    content: str | bytes
     if fmt == "geojson":
         content = _json_text(plan.geojson)
     else:
         coverage = coverage_plan_from_row(plan)
+        title = plan.name or f"plan {plan.id}"
+        speed_mps = float((plan.request or {}).get("speed_mps") or planner.DEFAULT_SPEED_MPS)
         if fmt == "gpx":
-            content = plan_to_gpx(coverage, name=plan.name or f"plan {plan.id}")
+            content = plan_to_gpx(coverage, name=title)
         elif fmt == "csv":
             content = plan_to_csv(coverage)
+        elif fmt == "kml":
+            content = plan_to_kml(coverage, name=title)
+        elif fmt == "waypoints":
+            content = plan_to_qgc_wpl(coverage, speed_mps=speed_mps)
+        elif fmt == "plan":
+            content = _json_text(plan_to_qgc_plan(coverage, speed_mps=speed_mps))
+        elif fmt == "gpkg":
+            content = plan_to_gpkg(coverage, name=title)
         else:
             content = _json_text(plan_to_waypoints_json(coverage))
     return ExportFile(content=content, media_type=media_type, filename=filename)
@@ -278,6 +298,13 @@ def export_simulation_gpx(session: Session, simulation: Simulation, access: Acce
     The tracks are the stored ones (one vertex per second), timed from midnight UTC of the
     simulation's date, as :func:`navigation.export.simulation_to_gpx` does.
     """
+    return export_simulation(session, simulation, access, "gpx")
+
+
+def export_simulation(
+    session: Session, simulation: Simulation, access: Access, fmt: str
+) -> ExportFile:
+    """Write a stored simulation as ``gpx`` or ``kml`` (its tracks as ``gx:Track``)."""
     plan = read_plan(session, simulation.plan_id, access)
     start = dt.datetime.combine(
         dt.date.fromisoformat(simulation.config["date"]), dt.time(0, 0), tzinfo=dt.UTC
@@ -298,9 +325,10 @@ def export_simulation_gpx(session: Session, simulation: Simulation, access: Acce
             )
         )
     title = f"{plan.name or f'plan {plan.id}'}: simulation {simulation.id}"
-    content = plan_to_gpx(coverage_plan_from_row(plan), name=title, tracks=tracks)
-    filename = f"{export_basename(plan)}-simulation-{simulation.id}.gpx"
-    return ExportFile(content=content, media_type=EXPORT_TYPES["gpx"][0], filename=filename)
+    writer = plan_to_kml if fmt == "kml" else plan_to_gpx
+    content = writer(coverage_plan_from_row(plan), name=title, tracks=tracks)
+    filename = f"{export_basename(plan)}-simulation-{simulation.id}.{fmt}"
+    return ExportFile(content=content, media_type=EXPORT_TYPES[fmt][0], filename=filename)
 
 
 def json_ready(value: Any) -> Any:

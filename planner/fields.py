@@ -177,7 +177,7 @@ def parse_fields_geojson(obj: Any) -> list[FieldSpec]:
             role = str(props["role"])
             points[role] = parse_position(geometry.get("coordinates"), input_name=role)
     if not found:
-        raise InvalidFieldError("field", "the file holds no Polygon")
+        raise InvalidFieldError("field", "holds no field boundary (no Polygon feature)")
     collection_name = str(obj["name"]) if kind == "FeatureCollection" and obj.get("name") else None
     return [
         FieldSpec(

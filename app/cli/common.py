@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import typer
 
 if TYPE_CHECKING:
-    from planner import CoveragePlan
+    from planner import CoveragePlan, FieldSpec
 
 #: Exit status for bad input (as argparse and click use for usage errors).
 EXIT_BAD_INPUT = 2
@@ -34,8 +34,18 @@ def read_json_file(path: Path, *, what: str) -> Any:
         fail(f"{what}: {path} is not valid JSON (line {exc.lineno}, column {exc.colno})")
 
 
-def write_output(text: str, output: Path | None) -> None:
-    """Write ``text`` to ``output``, or to stdout when ``output`` is None."""
+def write_output(text: str | bytes, output: Path | None) -> None:
+    """Write ``text`` (or binary ``bytes``) to ``output``, or to stdout when it is None."""
+    if isinstance(text, bytes):
+        if output is None:
+            sys.stdout.buffer.write(text)
+            sys.stdout.flush()
+            return
+        try:
+            output.write_bytes(text)
+        except OSError as exc:
+            fail(f"-o: cannot write {output}: {exc.strerror or exc}")
+        return
     if output is None:
         sys.stdout.write(text)
         if not text.endswith("\n"):
@@ -45,6 +55,61 @@ def write_output(text: str, output: Path | None) -> None:
         output.write_text(text, encoding="utf-8")
     except OSError as exc:
         fail(f"-o: cannot write {output}: {exc.strerror or exc}")
+
+
+def read_field_file(path: Path, *, feature: str | None, what: str = "FIELD") -> FieldSpec:
+    """Read one field of a field file of any import format (``--feature`` picks one of many).
+
+    Fails with status 2, naming the file, when it cannot be read; when it holds several fields
+    and none (or no known one) is chosen, the message lists them all.
+    """
+    from planner import PlannerError
+    from planner.errors import FieldChoiceError
+    from planner.io import read_fields, select_field
+
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        fail(f"{what}: cannot read {path}: {exc.strerror or exc}")
+    try:
+        return select_field(read_fields(data, filename=str(path)), feature, filename=str(path))
+    except FieldChoiceError as exc:
+        rows = "\n".join(
+            f"  {index:>4}  {ident or '-':<28} {name or '-':<28} {area / 10_000:10.2f} ha"
+            for index, ident, name, area in exc.choices
+        )
+        fail(
+            f"{what}: {exc}. Give --feature ID|NAME|INDEX, one of:\n"
+            f"  {'index':>4}  {'id':<28} {'name':<28} {'area':>13}\n{rows}"
+        )
+    except PlannerError as exc:
+        fail(f"{what}: {exc}")
+
+
+def plan_field_spec(
+    spec: FieldSpec,
+    *,
+    interval_m: float | None,
+    start_lonlat: tuple[float, float] | None = None,
+    finish_lonlat: tuple[float, float] | None = None,
+    **options: Any,
+) -> CoveragePlan:
+    """Plan one field as the commands do; the flags win over the file; bad input exits 2."""
+    from planner import PlannerError, plan_coverage
+
+    interval = interval_m if interval_m is not None else spec.interval_m
+    if interval is None:
+        fail("interval_m: give --interval (the field file has no interval_m property)")
+    try:
+        return plan_coverage(
+            spec.field_lonlat,
+            interval_m=interval,
+            start_lonlat=start_lonlat or spec.start_lonlat,
+            finish_lonlat=finish_lonlat or spec.finish_lonlat,
+            **options,
+        )
+    except PlannerError as exc:
+        fail(str(exc))
 
 
 def plan_field_document(

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from app.cli.common import fail, plan_field_document, read_json_file, write_output
+from app.cli.common import fail, plan_field_spec, read_field_file, write_output
 
 
 class OutputFormat(StrEnum):
@@ -19,6 +19,10 @@ class OutputFormat(StrEnum):
     gpx = "gpx"
     csv = "csv"
     json = "json"
+    kml = "kml"
+    waypoints = "waypoints"
+    plan = "plan"
+    gpkg = "gpkg"
 
 
 class ObjectiveChoice(StrEnum):
@@ -43,8 +47,20 @@ def parse_lonlat(text: str | None, *, option: str) -> tuple[float, float] | None
 
 def plan_command(
     field: Annotated[
-        Path, typer.Argument(metavar="FIELD", help="GeoJSON file with the field polygon.")
+        Path,
+        typer.Argument(
+            metavar="FIELD",
+            help="Field file: GeoJSON, KML, KMZ, zipped Shapefile or GeoPackage.",
+        ),
     ],
+    feature: Annotated[
+        str | None,
+        typer.Option(
+            "--feature",
+            metavar="ID|NAME|INDEX",
+            help="Which field of a file of many: its id, its name or its 0-based index.",
+        ),
+    ] = None,
     interval: Annotated[
         float | None,
         typer.Option(
@@ -79,26 +95,40 @@ def plan_command(
     ] = None,
 ) -> None:
     """Plan the back-and-forth path over FIELD; figures go to stderr, the plan to stdout or -o."""
-    from planner.export import plan_to_csv, plan_to_geojson, plan_to_gpx, plan_to_waypoints_json
+    from planner import export
 
-    plan, name = plan_field_document(
-        read_json_file(field, what="FIELD"),
+    spec = read_field_file(field, feature=feature)
+    start_lonlat = parse_lonlat(start, option="--start")
+    finish_lonlat = parse_lonlat(finish, option="--finish")
+    plan = plan_field_spec(
+        spec,
         interval_m=interval,
-        name_fallback=field.stem,
-        start_lonlat=parse_lonlat(start, option="--start"),
-        finish_lonlat=parse_lonlat(finish, option="--finish"),
+        start_lonlat=start_lonlat,
+        finish_lonlat=finish_lonlat,
         angle_deg=angle,
         objective=objective.value,
         headland_passes=headland,
     )
+    name = spec.name or field.stem
+    text: str | bytes
     if output_format is OutputFormat.geojson:
-        text = json.dumps(plan_to_geojson(plan, name=name), indent=1)
+        text = json.dumps(export.plan_to_geojson(plan, name=name), indent=1)
     elif output_format is OutputFormat.gpx:
-        text = plan_to_gpx(plan, name=name)
+        text = export.plan_to_gpx(plan, name=name)
     elif output_format is OutputFormat.csv:
-        text = plan_to_csv(plan)
+        text = export.plan_to_csv(plan)
+    elif output_format is OutputFormat.kml:
+        text = export.plan_to_kml(plan, name=name)
+    elif output_format is OutputFormat.waypoints:
+        text = export.plan_to_qgc_wpl(plan)
+    elif output_format is OutputFormat.plan:
+        text = json.dumps(export.plan_to_qgc_plan(plan), indent=1)
+    elif output_format is OutputFormat.gpkg:
+        if output is None:
+            fail("--format gpkg: a GeoPackage is a database file; give -o FILE.gpkg")
+        text = export.plan_to_gpkg(plan, name=name)
     else:
-        text = json.dumps(plan_to_waypoints_json(plan), indent=1)
+        text = json.dumps(export.plan_to_waypoints_json(plan), indent=1)
     write_output(text, output)
     s = plan.stats
     typer.echo(

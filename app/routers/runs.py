@@ -145,3 +145,26 @@ def export_run_gpx(run_id: int, session: SessionDep, access: Viewer) -> Response
         media_type=export.media_type,
         headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
     )
+
+
+@router.get(
+    "/runs/{run_id}/export/kml",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "KML 2.2 download",
+            "content": {"application/vnd.google-earth.kml+xml": {}},
+        },
+        **_NOT_FOUND,
+        **_BAD_INPUT,
+        **_CONFLICT,
+    },
+)
+def export_run_kml(run_id: int, session: SessionDep, access: Viewer) -> Response:
+    """Download a run as KML for Google Earth: its fixes as a ``gx:Track``, the plan with it."""
+    export = runs.export_run_track(session, runs.read_run(session, run_id, access), "kml")
+    return Response(
+        content=export.content,
+        media_type=export.media_type,
+        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
+    )

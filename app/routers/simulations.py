@@ -75,3 +75,26 @@ def export_simulation_gpx(simulation_id: int, session: SessionDep, access: Viewe
         media_type=export.media_type,
         headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
     )
+
+
+@router.get(
+    "/simulations/{simulation_id}/export/kml",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "KML 2.2 download",
+            "content": {"application/vnd.google-earth.kml+xml": {}},
+        },
+        **_NOT_FOUND,
+        **_BAD_INPUT,
+    },
+)
+def export_simulation_kml(simulation_id: int, session: SessionDep, access: Viewer) -> Response:
+    """Download a simulation as KML: the plan, true/estimated/GPS tracks as ``gx:Track``."""
+    simulation = services.read_simulation(session, simulation_id, access)
+    export = services.export_simulation(session, simulation, access, "kml")
+    return Response(
+        content=export.content,
+        media_type=export.media_type,
+        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
+    )

@@ -74,7 +74,7 @@ def test_flags_override_the_file(tmp_path: Path) -> None:
         (["--start", "115.3"], "error: --start: expected LON,LAT"),
         (["--start", "116.3,-8.6"], "error: start: "),
         (["--angle", "200"], "error: angle_deg: must be at least 0 and less than 180"),
-        (["--format", "kml"], "error: Invalid value for '--format'"),
+        (["--format", "shp"], "error: Invalid value for '--format'"),
         (["--headland", "9"], "error: headland_passes: must be from 0 to 5"),
     ],
 )
@@ -104,4 +104,5 @@ def test_bad_files_exit_2(tmp_path: Path) -> None:
     point = tmp_path / "point.geojson"
     point.write_text('{"type": "Point", "coordinates": [115, -8]}')
     result = run("plan", str(point), "--interval", "4")
-    assert result.returncode == 2 and result.stderr.startswith("error: field: must be a Polygon")
+    assert result.returncode == 2 and result.stderr.startswith("error: FIELD: ")
+    assert "point.geojson: holds no field boundary" in result.stderr
