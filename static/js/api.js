@@ -85,6 +85,11 @@ function requestForm(url, form) {
   return send(url, { method: "POST", body: form });
 }
 
+/** POST a multipart form (a file upload); answer the JSON or throw an ApiError. */
+export function postForm(url, form) {
+  return requestForm(url, form);
+}
+
 /** Simulations and runs (product.md §5, §7, §8), given the API root (`…/api`). */
 export class ChecksApi {
   constructor(apiUrl) {
@@ -101,6 +106,10 @@ export class ChecksApi {
 
   simulationGpxUrl(id) {
     return `${this.apiUrl}/simulations/${encodeURIComponent(id)}/export/gpx`;
+  }
+
+  simulationKmlUrl(id) {
+    return `${this.apiUrl}/simulations/${encodeURIComponent(id)}/export/kml`;
   }
 
   /** Upload a recorded track (GPX, CSV or NMEA) as a new run of the plan. */
@@ -120,5 +129,9 @@ export class ChecksApi {
 
   runGpxUrl(id) {
     return `${this.apiUrl}/runs/${encodeURIComponent(id)}/export/gpx`;
+  }
+
+  runKmlUrl(id) {
+    return `${this.apiUrl}/runs/${encodeURIComponent(id)}/export/kml`;
   }
 }

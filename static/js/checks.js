@@ -72,9 +72,11 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     simulation: $("simulation"),
     simulationTitle: $("simulation-title"),
     simulationGpx: $("simulation-gpx"),
+    simulationKml: $("simulation-kml"),
     run: $("run"),
     runTitle: $("run-title"),
     runGpx: $("run-gpx"),
+    runKml: $("run-kml"),
     runs: $("runs-list"),
     runsEmpty: $("runs-empty"),
   };
@@ -120,6 +122,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     ui.simulationTitle.textContent = `(${gps}, ${guidance}, seed ${seed})`;
     fillFigures(ui.simulation, simulation.metrics);
     ui.simulationGpx.href = api.simulationGpxUrl(simulation.id);
+    ui.simulationKml.href = api.simulationKmlUrl(simulation.id);
     ui.simulation.hidden = false;
   }
 
@@ -162,6 +165,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     });
     ui.runGpx.href = api.runGpxUrl(run.id);
     ui.runGpx.hidden = run.fix_count === 0;
+    ui.runKml.href = api.runKmlUrl(run.id);
+    ui.runKml.hidden = run.fix_count === 0;
     ui.run.hidden = false;
     stopPolling();
     if (run.source === "live") {

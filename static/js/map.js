@@ -5,9 +5,10 @@
 /* global L */
 
 import { signIn } from "./account.js";
-import { ApiError, ChecksApi, PlansApi } from "./api.js";
+import { ApiError, ChecksApi, PlansApi, postForm } from "./api.js";
 import { setUpChecks } from "./checks.js";
-import { FieldFileError, polygonOf, readFieldFile } from "./fieldfile.js";
+import { FieldFileError, polygonOf } from "./fieldfile.js";
+import { chooseField, parseFieldFile } from "./fieldpicker.js";
 import {
   formatAngle,
   formatArea,
@@ -81,6 +82,7 @@ const state = {
   placing: null, // "start" | "finish" while waiting for a map click
   requestSeq: 0, // answers to superseded requests are dropped
   checks: null, // simulations and runs of the stored plan (checks.js)
+  parseUrl: null, // POST /api/fields/parse: the server's reader of field files
 };
 
 // ---------------------------------------------------------------- messages
@@ -670,13 +672,30 @@ async function importField(file) {
   endPlacing();
   clearError();
   try {
-    const imported = readFieldFile(await file.text());
+    setStatus(`Reading ${file.name}…`);
+    // The server reads every import format (GeoJSON, KML/KMZ, zipped Shapefile, GeoPackage).
+    const { fields, start, finish } = await parseFieldFile(state.parseUrl, file, postForm);
+    document.getElementById("field-chooser")?.remove();
+    const chosen =
+      fields.length === 1
+        ? fields[0]
+        : await chooseField(state.map, fields, {
+            anchor: ui.importField.closest("section"),
+            fileName: file.name,
+            fit: fitMap,
+          });
+    if (chosen == null) {
+      setStatus("");
+      return;
+    }
     state.map.pm.disableDraw();
-    const layer = fieldFromPolygon(imported.field);
-    placeMarker("start", imported.start);
-    placeMarker("finish", imported.finish);
-    if (imported.intervalM != null) ui.interval.value = String(imported.intervalM);
-    if (imported.name && !ui.planName.value.trim()) ui.planName.value = imported.name;
+    const layer = fieldFromPolygon(chosen.geometry);
+    placeMarker("start", start);
+    placeMarker("finish", finish);
+    const { interval_m: intervalM, name, id } = chosen.properties ?? {};
+    if (intervalM != null && intervalM > 0) ui.interval.value = String(intervalM);
+    const title = name || id;
+    if (title && !ui.planName.value.trim()) ui.planName.value = title;
     const bounds = layer.getBounds();
     for (const marker of Object.values(state.markers)) if (marker) bounds.extend(marker.getLatLng());
     fitMap(bounds);
@@ -756,6 +775,7 @@ async function main() {
   const dataset = ui.app.dataset;
   await signIn(dataset.apiUrl);
   state.api = new PlansApi(dataset.plansUrl);
+  state.parseUrl = `${dataset.apiUrl.replace(/\/+$/, "")}/fields/parse`;
   state.map = createMap(dataset);
   setUpGeoman(state.map);
   state.checks = setUpChecks({

@@ -234,13 +234,15 @@ def test_import_paper_field_gives_four_lines(page: Page) -> None:
     assert plan["request"]["finish"] == pytest.approx([115.29816889, -8.62652064])
 
 
-def test_import_of_a_file_that_is_not_geojson_shows_an_alert(page: Page) -> None:
+def test_import_of_a_file_that_is_no_field_file_shows_an_alert_naming_it(page: Page) -> None:
     with page.expect_file_chooser() as chooser:
         button(page, "Import field").click()
     chooser.value.set_files(
-        files=[{"name": "field.geojson", "mimeType": "application/json", "buffer": b"<kml/>"}]
+        files=[
+            {"name": "photo.geojson", "mimeType": "application/json", "buffer": bytes(range(256))}
+        ]
     )
-    expect(page.get_by_role("alert")).to_contain_text("not GeoJSON")
+    expect(page.get_by_role("alert")).to_contain_text("photo.geojson: is binary data")
 
 
 def test_dragging_the_finish_marker_plans_again(page: Page) -> None:
