@@ -238,7 +238,7 @@ class SimulationRead(BaseModel):
 
 # --- Field runs (product.md §8) ----------------------------------------------------------
 
-RunSource = Literal["gpx", "csv", "nmea", "live"]
+RunSource = Literal["gpx", "csv", "nmea", "unicsv", "pos", "ubx", "kml", "live"]
 
 #: Most fixes accepted in one ``POST /api/runs/{id}/fixes`` batch.
 MAX_FIXES_PER_BATCH = 10_000

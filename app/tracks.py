@@ -75,6 +75,14 @@ _CSV_COLUMNS: Final[dict[str, str]] = {
 #: Fix qualities a track may carry (NMEA GGA 4 = rtk_fixed, 5 = rtk_float, 2 = dgps, 1 = single,
 #: 6 = dead_reckoning; RTKLIB Q 1/2/4/5 and u-blox carrier solutions map to the same names).
 FIX_QUALITIES = ("rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning")
+#: GGA fix quality -> FIX_QUALITIES (3 PPS and 7/8 manual/simulated carry no quality).
+_GGA_QUALITIES: Final = {
+    1: "single",
+    2: "dgps",
+    4: "rtk_fixed",
+    5: "rtk_float",
+    6: "dead_reckoning",
+}
 
 
 class TrackFormatError(ValueError):
@@ -331,9 +339,13 @@ def parse_track(data: bytes) -> ParsedTrack:
         For an unknown format, a malformed file, XML with a DTD or entities, or a file with no
         usable fix.
     """
+    from app.track_formats import EXTRA_TRACK_FORMATS, detect_extra_format, read_extra_format
+
     text = data.decode("utf-8", errors="replace")
-    fmt = detect_format(text)
-    if fmt == "gpx":
+    fmt = detect_extra_format(data) or detect_format(text)
+    if fmt in EXTRA_TRACK_FORMATS:
+        fixes, report = read_extra_format(fmt, data)
+    elif fmt == "gpx":
         fixes, report = _read_gpx(data)
     elif fmt == "nmea":
         fixes, report = _read_nmea(text)
@@ -342,8 +354,8 @@ def parse_track(data: bytes) -> ParsedTrack:
     else:
         raise TrackFormatError(
             "file",
-            "is not a track file tillpath can read: expected GPX, CSV with a "
-            "time,lat,lon header, or an NMEA 0183 log",
+            "is not a track file tillpath can read: expected GPX, KML, CSV with a "
+            "time,lat,lon header, gpsbabel unicsv, RTKLIB .pos, u-blox UBX or an NMEA 0183 log",
         )
     fixes, duplicates = sort_fixes(fixes)
     if not fixes:
@@ -494,6 +506,9 @@ class _Epoch:
     heading_deg: float | None = None
     speed_mps: float | None = None
     no_fix: bool = False
+    quality: str | None = None
+    hdop: float | None = None
+    satellites: int | None = None
 
 
 def _time_of_day_s(value: dt.time) -> float:
@@ -535,6 +550,8 @@ def _read_nmea(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
             position = _nmea_position(msg)
             if kind == "GGA":
                 quality = int(msg.gps_qual or 0)
+                hdop = _finite_or_none(float(msg.horizontal_dil)) if msg.horizontal_dil else None
+                sats = int(msg.num_sats) if msg.num_sats else None
             else:
                 status = msg.status
                 date = msg.datestamp
@@ -553,6 +570,7 @@ def _read_nmea(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
                 epoch.no_fix = True
             elif epoch.lat is None:
                 epoch.lat, epoch.lon = position
+            epoch.quality, epoch.hdop, epoch.satellites = _GGA_QUALITIES.get(quality), hdop, sats
         else:
             if isinstance(date, dt.date):
                 epoch.date = date
@@ -606,6 +624,9 @@ def _read_nmea(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
                 lon=epoch.lon,
                 heading_deg=epoch.heading_deg,
                 speed_mps=epoch.speed_mps,
+                quality=epoch.quality,
+                hdop=epoch.hdop,
+                satellites=epoch.satellites,
             )
         )
     report["no_fix"] = no_fix
