@@ -1,7 +1,8 @@
 """Read a tractor's recorded track: GPX, CSV or an NMEA 0183 log (product.md §8).
 
 Pure: the uploaded bytes in, a :class:`ParsedTrack` out (fixes sorted by time, one per
-timestamp), or a :class:`TrackFormatError` naming the problem. No database, no HTTP.
+timestamp), or a :class:`TrackFormatError` naming the problem. No database, no HTTP. gpsbabel
+unicsv, RTKLIB .pos, u-blox UBX and KML tracks are read by :mod:`app.track_formats`.
 
 Formats
 -------
@@ -36,11 +37,12 @@ from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from typing import Any, Final
 
-import defusedxml.ElementTree
 import gpxpy
 import gpxpy.gpx
 import pynmea2
-from defusedxml import DefusedXmlException
+
+from planner.errors import UnreadableFileError
+from planner.io.safety import check_xml
 
 #: The formats :func:`parse_track` reads.
 TRACK_FORMATS: Final = ("gpx", "csv", "nmea")
@@ -375,15 +377,9 @@ def parse_track(data: bytes) -> ParsedTrack:
 
 def _read_gpx(data: bytes) -> tuple[list[TrackFix], dict[str, Any]]:
     try:
-        defusedxml.ElementTree.fromstring(
-            data, forbid_dtd=True, forbid_entities=True, forbid_external=True
-        )
-    except DefusedXmlException:
-        raise TrackFormatError(
-            "file", "GPX with a DTD, entity declarations or external references is refused"
-        ) from None
-    except Exception as exc:  # ParseError: not well-formed (truncated, …)
-        raise TrackFormatError("file", f"is not well-formed XML ({exc})") from None
+        check_xml(data, filename="file", kind="GPX")  # the one XML safety check (planner.io)
+    except UnreadableFileError as exc:
+        raise TrackFormatError("file", exc.problem) from None
     try:
         gpx = gpxpy.parse(data.decode("utf-8", errors="replace"))
     except (gpxpy.gpx.GPXException, ValueError) as exc:
