@@ -17,7 +17,8 @@ Formats
   (x/y/z) solutions are refused with a clear message.
 - **u-blox UBX** (with pyubx2), NMEA mixed in or not: ``NAV-PVT`` epochs with a valid date and
   time and ``gnssFixOk``; the carrier solution gives RTK fixed/float, ``NAV-DOP`` of the same
-  epoch the HDOP. A log without ``NAV-PVT`` is read from its NMEA sentences, as an NMEA log.
+  epoch the HDOP; NMEA sentences beside them are counted and ignored (NAV-PVT is finer). A log
+  of NMEA sentences with UBX frames but no ``NAV-PVT`` is an NMEA log (:mod:`app.tracks`).
 - **KML** (Google Earth, tillpath's own exports; with fastkml after the XML safety check):
   the first ``gx:Track`` (``<when>`` with ``<gx:coord>``) or ``gx:MultiTrack``; else a
   LineString whose Placemark has a ``TimeSpan``, its times spread along it at constant speed.
@@ -56,6 +57,9 @@ _GPS_LEAP_SECONDS: Final = (
 )
 _GPS_EPOCH: Final = dt.datetime(1980, 1, 6, tzinfo=dt.UTC)
 _UBX_SYNC: Final = b"\xb5\x62"
+#: Sync, class NAV (0x01), id PVT (0x07) and its 92-byte payload length (little-endian).
+_UBX_NAV_PVT: Final = b"\xb5\x62\x01\x07\x5c\x00"
+_NMEA_SENTENCE = re.compile(r"\$[A-Z]{2}[A-Z0-9]{3},")
 _POS_TIME = re.compile(r"^\d{4}/\d{1,2}/\d{1,2}\s+\d{1,2}:\d{2}:\d{2}(\.\d+)?\s")
 _POS_WEEK = re.compile(r"^\d{3,4}\s+\d+(\.\d+)?\s")
 
@@ -113,9 +117,12 @@ def detect_extra_format(data: bytes) -> str | None:
     True
     """
     head = data[:8192]
-    if _UBX_SYNC in head:
+    if _UBX_NAV_PVT in data[:65536]:
         return "ubx"
     text = head.decode("utf-8", errors="replace").lstrip("\ufeff \t\r\n")
+    if _UBX_SYNC in head and not _NMEA_SENTENCE.search(text):
+        return "ubx"  # UBX without NAV-PVT: the reader says what to enable
+    # An NMEA log with UBX frames among its sentences (and no NAV-PVT) is read as NMEA.
     if text.startswith("<"):
         return "kml" if re.search(r"<(\w+:)?kml[\s>]", text[:2048]) else None
     lines = [line.strip() for line in text.splitlines() if line.strip()]
@@ -361,12 +368,11 @@ def _read_ubx(data: bytes) -> tuple[list[TrackFix], dict[str, Any]]:
         raise TrackFormatError("file", f"the UBX log cannot be read ({exc})") from None
 
     if not epochs:
-        if nmea_lines:
-            from app.tracks import _read_nmea
-
-            nmea_fixes, report = _read_nmea("\n".join(nmea_lines))
-            return nmea_fixes, {**report, "ubx_nav_pvt": 0}
-        return [], {"ubx_nav_pvt": 0}
+        raise TrackFormatError(
+            "file",
+            "the UBX log has no NAV-PVT message with a position and time; enable UBX-NAV-PVT "
+            "output on the receiver (u-center: UBX-CFG-MSG, or CFG-MSGOUT-UBX_NAV_PVT)",
+        )
 
     fixes: list[TrackFix] = []
     no_fix = no_time = 0

@@ -18,6 +18,14 @@ const TEXT = {
   refused: (detail) => `Import field: ${detail}`,
 };
 
+/** Closes the chooser on screen, if any (a second import, or Start over). */
+let closeOpenChooser = null;
+
+/** Close the field chooser if one is open; its promise resolves with null. */
+export function closeFieldChooser() {
+  closeOpenChooser?.();
+}
+
 const CHOICE_STYLE = {
   color: "#8fd3ff",
   weight: 2,
@@ -74,6 +82,7 @@ function label(feature) {
  * @returns {Promise<object|null>}
  */
 export function chooseField(map, fields, { anchor, fileName, fit }) {
+  closeFieldChooser();
   return new Promise((resolve) => {
     const card = document.createElement("section");
     card.className = "card field-chooser";
@@ -95,10 +104,12 @@ export function chooseField(map, fields, { anchor, fileName, fit }) {
     const layers = new Map();
     const group = L.featureGroup().addTo(map);
     const done = (feature) => {
+      closeOpenChooser = null;
       group.remove();
       card.remove();
       resolve(feature);
     };
+    closeOpenChooser = () => done(null);
     fields.forEach((feature, position) => {
       const layer = L.geoJSON(feature, { style: CHOICE_STYLE });
       layer.bindTooltip(`${label(feature)} · ${formatArea(feature.properties?.area_m2)}`, { sticky: true });

@@ -8,7 +8,7 @@ import { signIn } from "./account.js";
 import { ApiError, ChecksApi, PlansApi, postForm } from "./api.js";
 import { setUpChecks } from "./checks.js";
 import { FieldFileError, polygonOf } from "./fieldfile.js";
-import { chooseField, parseFieldFile } from "./fieldpicker.js";
+import { chooseField, closeFieldChooser, parseFieldFile } from "./fieldpicker.js";
 import {
   formatAngle,
   formatArea,
@@ -83,6 +83,7 @@ const state = {
   requestSeq: 0, // answers to superseded requests are dropped
   checks: null, // simulations and runs of the stored plan (checks.js)
   parseUrl: null, // POST /api/fields/parse: the server's reader of field files
+  importSeq: 0, // a newer import supersedes a field choice still open
 };
 
 // ---------------------------------------------------------------- messages
@@ -672,10 +673,12 @@ async function importField(file) {
   endPlacing();
   clearError();
   try {
+    const seq = ++state.importSeq;
     setStatus(`Reading ${file.name}…`);
     // The server reads every import format (GeoJSON, KML/KMZ, zipped Shapefile, GeoPackage).
     const { fields, start, finish } = await parseFieldFile(state.parseUrl, file, postForm);
-    document.getElementById("field-chooser")?.remove();
+    closeFieldChooser();
+    if (fields.length > 1) setStatus(`Choose one of the ${fields.length} fields of ${file.name}.`);
     const chosen =
       fields.length === 1
         ? fields[0]
@@ -685,7 +688,7 @@ async function importField(file) {
             fit: fitMap,
           });
     if (chosen == null) {
-      setStatus("");
+      if (seq === state.importSeq) setStatus(""); // cancelled, not replaced by a newer import
       return;
     }
     state.map.pm.disableDraw();
@@ -706,6 +709,7 @@ async function importField(file) {
 }
 
 function startOver() {
+  closeFieldChooser();
   endPlacing();
   clearError();
   state.map.pm.disableDraw();

@@ -174,14 +174,20 @@ def test_ubx_nav_pvt_with_nmea_mixed_in_reads_every_epoch_with_rtk_quality() -> 
         assert (fix.hdop, fix.satellites, fix.speed_mps) == (0.7, 14, 0.56)
 
 
-def test_ubx_log_of_nmea_only_reads_as_nmea_with_gga_quality() -> None:
+def test_nmea_log_with_ubx_frames_but_no_nav_pvt_reads_as_nmea_with_gga_quality() -> None:
     times, lon, lat = true_track()
     lines = nmea_lines(times, lon, lat, quality=[4] * len(times))
     monitor = UBXMessage("NAV", "NAV-DOP", GET, iTOW=0, hDOP=0.7).serialize()
     data = monitor + ("\r\n".join(lines) + "\r\n").encode()
     track = parse_track(data)
-    assert track.format == "ubx" and len(track.fixes) == len(times)
+    assert track.format == "nmea" and len(track.fixes) == len(times)
     assert {(f.quality, f.hdop, f.satellites) for f in track.fixes} == {("rtk_fixed", 0.86, 9)}
+
+
+def test_ubx_without_nav_pvt_says_what_to_enable() -> None:
+    data = UBXMessage("NAV", "NAV-DOP", GET, iTOW=0, hDOP=0.7).serialize() * 3
+    with pytest.raises(TrackFormatError, match="enable UBX-NAV-PVT"):
+        parse_track(data)
 
 
 def test_nmea_log_keeps_gga_quality_hdop_and_satellites() -> None:
@@ -272,6 +278,6 @@ def test_malformed_ubx_stores_nothing(
     response = client.post(
         f"/api/plans/{plan['id']}/runs", files={"file": ("x.ubx", b"\xb5\x62\x01\x07\x5c\x00")}
     )
-    assert response.status_code == 422 and "no usable fix" in response.json()["detail"]
+    assert response.status_code == 422 and "NAV-PVT" in response.json()["detail"]
     session.expire_all()
     assert session.scalar(select(func.count()).select_from(Run)) == before
