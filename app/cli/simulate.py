@@ -17,7 +17,14 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from app.cli.common import fail, plan_field_document, read_json_file, write_output
+from app.cli.common import (
+    fail,
+    plan_field_document,
+    plan_field_spec,
+    read_field_file,
+    read_json_file,
+    write_output,
+)
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -57,9 +64,15 @@ def _is_plan(document: Any) -> bool:
 
 
 def load_plan(path: Path, *, interval: float | None) -> tuple[CoveragePlan, str]:
-    """Read FIELD (and plan it) or PLAN; return the plan and a name for it."""
+    """Read FIELD (and plan it) or PLAN; return the plan and a name for it.
+
+    FIELD may be any import format (KML, KMZ, zipped Shapefile, GeoPackage) of one field.
+    """
     from planner import PlannerError
 
+    if path.suffix.lower() in (".kml", ".kmz", ".zip", ".gpkg"):
+        spec = read_field_file(path, feature=None, what="FIELD|PLAN")
+        return plan_field_spec(spec, interval_m=interval), spec.name or path.stem
     document = read_json_file(path, what="FIELD|PLAN")
     try:
         if _is_plan(document):

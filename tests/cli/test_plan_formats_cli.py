@@ -116,3 +116,12 @@ def test_plan_and_kml_outputs(tmp_path: Path) -> None:
     assert document["fileType"] == "Plan" and document["mission"]["vehicleType"] == 10
     kml = run("plan", str(RWANDA), "--feature", "0", "--interval", "4", "--format", "kml")
     assert kml.returncode == 0 and "<kml" in kml.stdout
+
+
+def test_simulate_takes_a_kmz_field(tmp_path: Path) -> None:
+    path = tmp_path / "sawah.kmz"
+    path.write_bytes(kmz_bytes(tmp_path, shared_polygon("paper")))
+    result = run("simulate", str(path), "--interval", "4")
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout)
+    assert report["scenario"]["interval_m"] == 4.0 and report["metrics"]["completed"] is True
