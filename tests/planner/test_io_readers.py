@@ -191,3 +191,44 @@ def test_kml_start_and_finish_placemarks_are_the_gates(tmp_path: Path) -> None:
     assert spec.start_lonlat == pytest.approx((115.29797264, -8.62652248))
     assert spec.finish_lonlat == pytest.approx((115.29816889, -8.62652064))
     assert isinstance(spec.field_lonlat, Polygon)
+
+
+def test_google_earth_layout_with_style_maps_folders_and_altitudes_reads(tmp_path: Path) -> None:
+    """The layout Google Earth Pro saves (namespaces, StyleMap, nested Folder, lon,lat,0 text).
+
+    GDAL writes no such file, so the layout is spelled out here; the coordinates are the shared
+    paper field's.
+    """
+    polygon = shared_polygon("paper")
+    coords = " ".join(f"{x},{y},0" for x, y in polygon.exterior.coords)
+    kml = f"""<?xml version="1.0" encoding="UTF-8"?>
+<kml xmlns="http://www.opengis.net/kml/2.2" xmlns:gx="http://www.google.com/kml/ext/2.2"
+ xmlns:kml="http://www.opengis.net/kml/2.2" xmlns:atom="http://www.w3.org/2005/Atom">
+<Document>
+	<name>Sawah Ketewel.kml</name>
+	<StyleMap id="m_ylw-pushpin"><Pair><key>normal</key><styleUrl>#s_ylw-pushpin</styleUrl></Pair>
+		<Pair><key>highlight</key><styleUrl>#s_ylw-pushpin_hl</styleUrl></Pair></StyleMap>
+	<Style id="s_ylw-pushpin"><LineStyle><color>ff00ffff</color></LineStyle></Style>
+	<Folder><name>My Places</name><open>1</open>
+	<Placemark>
+		<name>Sawah Ketewel</name>
+		<styleUrl>#m_ylw-pushpin</styleUrl>
+		<Polygon>
+			<tessellate>1</tessellate>
+			<outerBoundaryIs>
+				<LinearRing>
+					<coordinates>
+						{coords}
+					</coordinates>
+				</LinearRing>
+			</outerBoundaryIs>
+		</Polygon>
+	</Placemark>
+	</Folder>
+</Document>
+</kml>
+"""
+    (spec,) = read_fields(kml.encode(), filename="Sawah Ketewel.kml")
+    assert spec.name == "Sawah Ketewel"
+    assert spec.field_lonlat.equals(polygon)
+    assert plan_of(spec).stats.line_count == 4
