@@ -221,6 +221,21 @@ RULES: dict[tuple[str, str], Rule] = {
     ("GET", "/api/runs/{run_id}/export/gpx"): Rule(
         "viewer", get("/api/runs/{o.run_id}/export/gpx"), item=True
     ),
+    # Field files and KML exports (issue 12).
+    ("POST", "/api/fields/parse"): Rule(
+        "viewer",
+        lambda o: (
+            "POST",
+            "/api/fields/parse",
+            {"files": {"file": ("field.geojson", json.dumps(o.body["field"]).encode())}},
+        ),
+    ),
+    ("GET", "/api/simulations/{simulation_id}/export/kml"): Rule(
+        "viewer", get("/api/simulations/{o.simulation_id}/export/kml"), item=True
+    ),
+    ("GET", "/api/runs/{run_id}/export/kml"): Rule(
+        "viewer", get("/api/runs/{o.run_id}/export/kml"), item=True
+    ),
 }
 
 
