@@ -1,18 +1,21 @@
-"""``POST /api/fields/parse``: read a field file of any import format into its fields (§4).
+"""Field files of any import format (§4, §12): read them, or import them into the registry.
 
-The page sends the file the user picked; the answer lists every field (id, name, area) as a
-GeoJSON FeatureCollection, so the page can show them all and let the user choose one. Nothing
-is stored (the registry's ``POST /api/fields/import`` stores them).
+``POST /api/fields/parse``: the page sends the file the user picked; the answer lists every
+field (id, name, area) as a GeoJSON FeatureCollection, so the page can show them all and let
+the user choose one. Nothing is stored. ``POST /api/fields/import`` stores every field of the
+file in the organisation's registry at once.
 """
 
 from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, File, UploadFile
+from fastapi import APIRouter, Depends, File, Response, UploadFile, status
 
-from app.auth import Viewer
+from app.auth import Planner, Viewer
+from app.db import SessionDep
 from app.errors import UploadTooLargeError
+from app.field_import import FieldImportRead, import_fields
 from app.schemas import ErrorRead
 from app.settings import Settings, get_settings
 from planner.io import fields_to_geojson, read_fields
@@ -44,11 +47,44 @@ def parse_field_file(
     ],
 ) -> dict[str, Any]:
     """Read a field file into its fields, reprojected to WGS84; store nothing."""
-    limit = settings.max_upload_bytes
-    data = file.file.read(limit + 1)
-    if len(data) > limit:
-        raise UploadTooLargeError(limit)
-    name = (file.filename or "").strip() or "file"
+    data, name = _read_upload(file, settings.max_upload_bytes)
     collection = fields_to_geojson(read_fields(data, filename=name))
     collection["name"] = name
     return collection
+
+
+@router.post(
+    "/import",
+    response_model=FieldImportRead,
+    status_code=status.HTTP_201_CREATED,
+    responses={
+        413: {"model": ErrorRead, "description": "Upload over the configured limit"},
+        422: {"model": ErrorRead, "description": "The file or one of its fields is refused"},
+    },
+)
+def import_field_file(
+    settings: SettingsDep,
+    session: SessionDep,
+    access: Planner,
+    response: Response,
+    file: Annotated[
+        UploadFile,
+        File(description="GeoJSON, KML, KMZ, zipped Shapefile or GeoPackage of many fields."),
+    ],
+) -> FieldImportRead:
+    """Store every field of the file in the registry, in file order (all or nothing).
+
+    A field whose boundary the organisation already has is reused, not copied; the answer
+    lists the file's fields as stored.
+    """
+    data, name = _read_upload(file, settings.max_upload_bytes)
+    imported = import_fields(session, read_fields(data, filename=name), access, filename=name)
+    response.headers["Location"] = "/api/fields"
+    return imported
+
+
+def _read_upload(file: UploadFile, limit: int) -> tuple[bytes, str]:
+    data = file.file.read(limit + 1)
+    if len(data) > limit:
+        raise UploadTooLargeError(limit)
+    return data, (file.filename or "").strip() or "file"

@@ -230,6 +230,15 @@ RULES: dict[tuple[str, str], Rule] = {
             {"files": {"file": ("field.geojson", json.dumps(o.body["field"]).encode())}},
         ),
     ),
+    ("POST", "/api/fields/import"): Rule(
+        "planner",
+        lambda o: (
+            "POST",
+            "/api/fields/import",
+            {"files": {"file": ("field.geojson", json.dumps(o.body["field"]).encode())}},
+        ),
+        ok=201,
+    ),
     ("GET", "/api/simulations/{simulation_id}/export/kml"): Rule(
         "viewer", get("/api/simulations/{o.simulation_id}/export/kml"), item=True
     ),
