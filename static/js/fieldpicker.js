@@ -14,6 +14,7 @@ const TEXT = {
   heading: (count, file) => `${file} holds ${count} fields: choose one`,
   hint: "Click a field on the map or in the list.",
   cancel: "Cancel",
+  importAll: (count) => `Add all ${count} to my fields`,
   unnamed: (index) => `Field ${index + 1}`,
   refused: (detail) => `Import field: ${detail}`,
 };
@@ -78,10 +79,12 @@ function label(feature) {
  *
  * @param {L.Map} map
  * @param {object[]} fields Polygon Features with `index`, `id`, `name`, `area_m2` properties.
- * @param {{anchor: HTMLElement, fileName: string, fit: (bounds: L.LatLngBounds) => void}} options
+ * @param {{anchor: HTMLElement, fileName: string, fit: (bounds: L.LatLngBounds) => void,
+ *          importAll?: () => Promise<void>}} options `importAll` stores every field of the
+ *   file in the registry (the chooser stays open to pick one to plan).
  * @returns {Promise<object|null>}
  */
-export function chooseField(map, fields, { anchor, fileName, fit }) {
+export function chooseField(map, fields, { anchor, fileName, fit, importAll }) {
   closeFieldChooser();
   return new Promise((resolve) => {
     const card = document.createElement("section");
@@ -140,7 +143,23 @@ export function chooseField(map, fields, { anchor, fileName, fit }) {
       list.append(item);
     });
     cancel.addEventListener("click", () => done(null));
-    card.append(heading, hint, list, cancel);
+    card.append(heading, hint, list);
+    if (importAll) {
+      const all = document.createElement("button");
+      all.type = "button";
+      all.className = "small";
+      all.textContent = TEXT.importAll(fields.length);
+      all.addEventListener("click", async () => {
+        all.disabled = true;
+        try {
+          await importAll();
+        } finally {
+          all.disabled = false;
+        }
+      });
+      card.append(all);
+    }
+    card.append(cancel);
     anchor.after(card);
     fit(group.getBounds());
     list.querySelector("button")?.focus();

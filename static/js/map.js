@@ -686,6 +686,7 @@ async function importField(file) {
             anchor: ui.importField.closest("section"),
             fileName: file.name,
             fit: fitMap,
+            importAll: () => importAllFields(file),
           });
     if (chosen == null) {
       if (seq === state.importSeq) setStatus(""); // cancelled, not replaced by a newer import
@@ -703,6 +704,20 @@ async function importField(file) {
     for (const marker of Object.values(state.markers)) if (marker) bounds.extend(marker.getLatLng());
     fitMap(bounds);
     setStatus(`Imported ${file.name}. Check the interval, then press Generate path.`);
+  } catch (error) {
+    showFailure(error);
+  }
+}
+
+/** Store every field of `file` in the organisation's registry (POST /api/fields/import). */
+async function importAllFields(file) {
+  clearError();
+  const form = new FormData();
+  form.append("file", file, file.name);
+  try {
+    const { created, reused } = await postForm(state.parseUrl.replace(/parse$/, "import"), form);
+    setStatus(`Added ${created} fields of ${file.name} to your fields (${reused} were there already).`);
+    state.fields?.refresh();
   } catch (error) {
     showFailure(error);
   }

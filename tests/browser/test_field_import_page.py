@@ -73,3 +73,13 @@ def test_a_field_is_chosen_by_clicking_it_on_the_map(page: Page) -> None:
     shapes.nth(2).click()  # rwanda_2021-2 is convex: its middle is inside it
     expect(page.locator("#field-chooser")).to_have_count(0)
     expect(page.get_by_label("Plan name")).to_have_value("rwanda_2021-2")
+
+
+def test_all_thirty_fields_are_added_to_the_registry_from_the_chooser(page: Page) -> None:
+    data = (FIELDS_DIR / "rwanda_2021.geojson").read_bytes()
+    choose_file(page, "rwanda_2021.geojson", data, "application/geo+json")
+    with page.expect_response("**/api/fields/import") as answer:
+        page.get_by_role("button", name="Add all 30 to my fields").click()
+    assert answer.value.status == 201, answer.value.text()
+    expect(page.get_by_role("status")).to_contain_text("Added 30 fields of rwanda_2021.geojson")
+    expect(page.locator("#field-chooser")).to_have_count(1)  # still open to pick one to plan
