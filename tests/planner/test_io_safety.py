@@ -77,3 +77,41 @@ def test_member_larger_than_declared_is_refused() -> None:
     data[central + 24 : central + 28] = (10).to_bytes(4, "little")
     with pytest.raises(UnreadableFileError, match="doc.kml cannot be unpacked"):
         unzip_checked(bytes(data), filename="liar.kmz")
+
+
+def test_kml_links_to_other_servers_are_not_fetched() -> None:
+    """No request leaves for a NetworkLink, a remote style or an icon (no SSRF through GDAL)."""
+    import http.server
+    import threading
+
+    requests: list[str] = []
+
+    class Recorder(http.server.BaseHTTPRequestHandler):
+        def do_GET(self) -> None:  # noqa: N802 - the http.server API
+            requests.append(self.path)
+            self.send_response(404)
+            self.end_headers()
+
+        def log_message(self, *args: object) -> None:
+            pass
+
+    server = http.server.HTTPServer(("127.0.0.1", 0), Recorder)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    base = f"http://127.0.0.1:{server.server_address[1]}"
+    kml = f"""<?xml version="1.0" encoding="UTF-8"?>
+<kml xmlns="http://www.opengis.net/kml/2.2"><Document>
+<NetworkLink><name>more</name><Link><href>{base}/more.kml</href></Link></NetworkLink>
+<Style id="s"><IconStyle><Icon><href>{base}/icon.png</href></Icon></IconStyle></Style>
+<Placemark><name>f</name><styleUrl>{base}/styles.kml#s</styleUrl><Polygon><outerBoundaryIs>
+<LinearRing><coordinates>115.298,-8.6265 115.2981,-8.6265 115.2981,-8.6264 115.298,-8.6265
+</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark></Document></kml>"""
+    try:
+        (spec,) = read_fields(kml.encode(), filename="links.kml")
+        kmz = zipped({"doc.kml": kml.encode()})
+        read_fields(kmz, filename="links.kmz")
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert spec.name == "f"
+    assert requests == []
