@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -118,14 +119,14 @@ def read_ogr_features(data: bytes, *, filename: str, what: str) -> Iterator[OgrF
             )
 
 
-class _quiet_gdal(warnings.catch_warnings):  # noqa: N801 - used as a context manager
+@contextmanager
+def _quiet_gdal() -> Iterator[None]:
     """Silence GDAL's RuntimeWarning about in-memory names (a GeoPackage has no ``.gpkg``)."""
-
-    def __enter__(self) -> None:
-        super().__enter__()
+    with warnings.catch_warnings():
         warnings.filterwarnings(
             "ignore", message=".*non conformant file extension", category=RuntimeWarning
         )
+        yield
 
 
 def _plain(value: Any) -> Any:
