@@ -232,3 +232,22 @@ def test_google_earth_layout_with_style_maps_folders_and_altitudes_reads(tmp_pat
     assert spec.name == "Sawah Ketewel"
     assert spec.field_lonlat.equals(polygon)
     assert plan_of(spec).stats.line_count == 4
+
+
+def test_kml_multigeometry_of_two_polygons_is_two_fields() -> None:
+    a, b = shared_polygon("paper"), shared_polygon("rwanda-3")
+
+    def ring(p: Polygon) -> str:
+        coords = " ".join(f"{x},{y},0" for x, y in p.exterior.coords)
+        return (
+            f"<Polygon><outerBoundaryIs><LinearRing><coordinates>{coords}</coordinates>"
+            "</LinearRing></outerBoundaryIs></Polygon>"
+        )
+
+    kml = (
+        '<kml xmlns="http://www.opengis.net/kml/2.2"><Document><Placemark><name>Farm</name>'
+        f"<MultiGeometry>{ring(a)}{ring(b)}</MultiGeometry></Placemark></Document></kml>"
+    )
+    fields = read_fields(kml.encode(), filename="farm.kml")
+    assert [f.name for f in fields] == ["Farm (1 of 2)", "Farm (2 of 2)"]
+    assert fields[0].field_lonlat.equals(a) and fields[1].field_lonlat.equals(b)
