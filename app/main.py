@@ -6,6 +6,7 @@ Run it with ``tillpath serve`` (uvicorn's factory mode: ``app.main:create_app``)
 from __future__ import annotations
 
 from fastapi import FastAPI
+from starlette.middleware.gzip import GZipMiddleware
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
 from app.routers import auth, field_files, fields, health, pages, plans, runs, simulations
@@ -13,6 +14,8 @@ from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
 
 API_PREFIX = "/api"
+#: Answers smaller than this go uncompressed: gzip's header would eat the gain [bytes].
+GZIP_MINIMUM_BYTES = 1000
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -63,6 +66,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         SecurityHeadersMiddleware,
         csp=content_security_policy([settings.satellite_tile_url, settings.street_tile_url]),
     )
+
+    # Outermost: every answer over 1 KB is gzip-compressed when the client accepts it (a plan's
+    # GeoJSON, a simulation, the page's libraries: a rural mobile link pays for every byte).
+    app.add_middleware(GZipMiddleware, minimum_size=GZIP_MINIMUM_BYTES)
 
     pages.mount_pages(app)
     return app

@@ -236,6 +236,25 @@ class SimulationRead(BaseModel):
     )
 
 
+class SimulationSummary(BaseModel):
+    """A simulation in a plan's list: its configuration and metrics, no tracks."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    plan_id: int
+    created_at: dt.datetime
+    config: dict[str, Any]
+    metrics: MetricsRead
+
+
+class SimulationList(BaseModel):
+    """A plan's simulations, newest first."""
+
+    items: list[SimulationSummary]
+    total: int
+
+
 # --- Field runs (product.md §8) ----------------------------------------------------------
 
 RunSource = Literal["gpx", "csv", "nmea", "unicsv", "pos", "ubx", "kml", "live"]

@@ -152,6 +152,14 @@ def test_saved_plan_opens_from_saved_plans_after_reload(page: Page) -> None:
     expect(gpx_link).to_have_attribute("href", re.compile(rf"/api/plans/{saved['id']}/export/gpx$"))
     page.reload()
     page.wait_for_selector("#app[data-ready='true']")
+    # The draft brings the stored plan back after the reload ...
+    expect(figure(page, "Lines")).to_have_text(str(saved["stats"]["line_count"]))
+    # ... and Start over (after asking) clears the map, not the saved plans.
+    page.once("dialog", lambda dialog: dialog.accept())
+    button(page, "Start over").click()
+    expect_no_plan(page)
+    page.reload()
+    page.wait_for_selector("#app[data-ready='true']")
     expect_no_plan(page)
 
     saved_plans = page.get_by_role("list", name="Saved plans")
@@ -368,6 +376,8 @@ def test_format_helpers_use_human_units(page: Page) -> None:
                 f.friendlyError(422, "interval_m: must be between 0.2 and 50 m, got 0").message,
                 f.friendlyError(422, "field: polygon is self-intersecting near (1, 2)").input,
                 f.friendlyError(0, null).message,
+                f.friendlyError(422, "file: is not a track file tillpath can read: expected GPX")
+                    .message,
             ];
         }"""
     )
@@ -383,3 +393,16 @@ def test_format_helpers_use_human_units(page: Page) -> None:
     assert shown[7].startswith("Interval (m): must be between 0.2 and 50 m, got 0.")
     assert shown[8] == "field"
     assert "Cannot reach the tillpath server" in shown[9]
+    # A sentence, not "File: is not a track file".
+    assert shown[10].startswith("This file is not a track file tillpath can read: expected GPX.")
+
+
+def test_waypoint_tooltips_number_lines_as_the_exports_do(page: Page) -> None:
+    import_paper_field(page)
+    plan = generate(page)
+    first = plan["waypoints"][1]
+    assert first["role"] == "line_start"
+    page.locator(".waypoint").first.hover()
+    expect(page.locator(".leaflet-tooltip")).to_have_text(
+        f"Waypoint {first['seq']}: start of a line, line {first['line']}"
+    )
