@@ -84,7 +84,17 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
     ),
     N_("has no usable fix ({why})"),
     N_("the CSV file is empty"),
+    # accounts (app/accounts.py, app/auth.py, app/errors.py)
+    N_("username or password is wrong"),
+    N_("too many failed sign-ins for this account; try again in about {minutes} minutes"),
+    N_("too many failed sign-ins for this address; try again in about {minutes} minutes"),
+    N_("sign in first, or send an API token as `Authorization: Bearer …`"),
+    N_("must be {low} to {high} characters long"),
+    N_("{name} was just taken; choose another"),
     # stored objects
+    N_("field {id} not found"),
+    N_("token {id} not found"),
+    N_("organisation {id} not found"),
     N_("plan {id} not found"),
     N_("simulation {id} not found"),
     N_("run {id} not found"),

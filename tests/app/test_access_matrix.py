@@ -119,6 +119,10 @@ RULES: dict[tuple[str, str], Rule] = {
     ("GET", "/docs"): Rule("public", get("/docs")),
     ("GET", "/openapi.json"): Rule("public", get("/openapi.json")),
     ("GET", "/api/health"): Rule("public", get("/api/health")),
+    # The page's translations, manifest and service worker (issue 13): public, like the page.
+    ("GET", "/i18n/{lang}.json"): Rule("public", get("/i18n/id.json")),
+    ("GET", "/manifest.webmanifest"): Rule("public", get("/manifest.webmanifest")),
+    ("GET", "/sw.js"): Rule("public", get("/sw.js")),
     # Accounts.
     ("GET", "/api/auth/setup"): Rule("public", get("/api/auth/setup")),
     ("POST", "/api/auth/signup"): Rule(
@@ -210,6 +214,9 @@ RULES: dict[tuple[str, str], Rule] = {
     # Runs: a device token may open a live run and post fixes.
     ("POST", "/api/plans/{plan_id}/runs"): Rule(
         "fixes", lambda o: ("POST", f"/api/plans/{o.plan_id}/runs", {}), ok=201, item=True
+    ),
+    ("GET", "/api/plans/{plan_id}/simulations"): Rule(
+        "viewer", get("/api/plans/{o.plan_id}/simulations"), item=True
     ),
     ("GET", "/api/plans/{plan_id}/runs"): Rule(
         "viewer", get("/api/plans/{o.plan_id}/runs"), item=True

@@ -55,6 +55,9 @@ def test_indonesian_browser_gets_every_control_in_indonesian(id_page: Page) -> N
     expect(page.get_by_role("button", name=id_("Show my location"))).to_be_visible()
     expect(page.get_by_role("button", name=id_("Zoom in"))).to_be_visible()
     expect(page.get_by_placeholder(id_("automatic"))).to_be_visible()
+    # The workspace's controls too (issue 11's account card and field registry).
+    expect(page.get_by_role("button", name=id_("Sign out"), exact=True)).to_be_visible()
+    expect(page.get_by_role("heading", name=id_("Fields"), exact=True)).to_be_visible()
     # The drawing tool speaks Indonesian too, in our words (setLang).
     expect(page.get_by_role("button", name=id_("Cut out a hole (pond, hut, tree)"))).to_be_visible()
     # No English control name is left on the page.
