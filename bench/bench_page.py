@@ -20,6 +20,7 @@ import json
 import math
 import shutil
 import tempfile
+import urllib.error
 import urllib.request
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -28,7 +29,27 @@ from typing import Any
 
 from playwright.sync_api import sync_playwright
 
-from app.testing import CHROMIUM_ARGS, running_server
+from app.testing import CHROMIUM_ARGS, TEST_PASSWORD, TEST_USERNAME, running_server
+
+#: The signed-in session of the API calls (cookie jar) and its CSRF token.
+_OPENER = urllib.request.build_opener(urllib.request.HTTPCookieProcessor())
+_CSRF: dict[str, str] = {}
+
+
+def log_in(base: str) -> None:
+    """Sign in as the test user ``running_server`` creates (a server before accounts: no-op)."""
+    body = json.dumps({"username": TEST_USERNAME, "password": TEST_PASSWORD}).encode()
+    request = urllib.request.Request(
+        f"{base}/api/auth/login", data=body, headers={"Content-Type": "application/json"}
+    )
+    try:
+        with _OPENER.open(request, timeout=30) as response:
+            token = json.loads(response.read()).get("csrf_token")
+            if token:
+                _CSRF["X-CSRF-Token"] = token
+    except urllib.error.HTTPError:
+        pass
+
 
 #: A 200 m × 200 m square (4 ha) at Ketewel, Bali, planned at 4 m: 50 lines.
 LAT0, LON0 = -8.6264, 115.2981
@@ -52,23 +73,24 @@ def four_hectare_field() -> dict[str, Any]:
 def post(url: str, body: dict[str, Any] | None, *, gzip_ok: bool) -> tuple[int, bytes, str]:
     """POST JSON; return status, the raw body as sent and its Content-Encoding."""
     data = json.dumps(body or {}).encode()
-    headers = {"Content-Type": "application/json"}
+    headers = {"Content-Type": "application/json", **_CSRF}
     if gzip_ok:
         headers["Accept-Encoding"] = "gzip"
     request = urllib.request.Request(url, data=data, headers=headers, method="POST")
-    with urllib.request.urlopen(request, timeout=120) as response:
+    with _OPENER.open(request, timeout=120) as response:
         return response.status, response.read(), response.headers.get("content-encoding", "")
 
 
 def get(url: str, *, gzip_ok: bool) -> tuple[bytes, str]:
     """GET; return the raw body as sent and its Content-Encoding."""
     headers = {"Accept-Encoding": "gzip"} if gzip_ok else {}
-    with urllib.request.urlopen(urllib.request.Request(url, headers=headers), timeout=60) as r:
+    with _OPENER.open(urllib.request.Request(url, headers=headers), timeout=60) as r:
         return r.read(), r.headers.get("content-encoding", "")
 
 
 def simulation_sizes(base: str) -> dict[str, int]:
     """Bytes of a 4 ha simulation answer: full and display, with and without gzip."""
+    log_in(base)
     _, plan_body, _ = post(
         f"{base}/api/plans",
         {"name": "4 ha", "field": four_hectare_field(), "interval_m": 4},
@@ -110,6 +132,8 @@ def page_weight(base: str) -> dict[str, int]:
                 route.continue_() if route.request.url.startswith(base) else route.abort()
             ),
         )
+        login = {"username": TEST_USERNAME, "password": TEST_PASSWORD}
+        context.request.post(base + "/api/auth/login", data=login)
         page = context.new_page()
         cdp = context.new_cdp_session(page)
         cdp.send("Network.enable")

@@ -81,14 +81,16 @@ function waypointLayer(geojson) {
   return { layer, renderer: canvas };
 }
 
+/**
+ * An arrow pointing `degrees` clockwise from screen east. The rotation is set through the DOM
+ * (CSSOM), not as a style="" attribute in the icon's HTML: the Content-Security-Policy
+ * (style-src 'self') drops inline style attributes, and every arrow then pointed east.
+ */
 function arrowMarker(latlng, degrees) {
+  const arrow = document.createElement("span");
+  arrow.style.transform = `rotate(${degrees.toFixed(1)}deg)`;
   return L.marker(latlng, {
-    icon: L.divIcon({
-      className: "path-arrow",
-      html: `<span style="transform: rotate(${degrees.toFixed(1)}deg)"></span>`,
-      iconSize: [18, 18],
-      iconAnchor: [9, 9],
-    }),
+    icon: L.divIcon({ className: "path-arrow", html: arrow, iconSize: [18, 18], iconAnchor: [9, 9] }),
     interactive: false,
     keyboard: false,
     pmIgnore: true,

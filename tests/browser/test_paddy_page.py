@@ -209,3 +209,15 @@ def test_saved_plans_are_searchable(page: Page) -> None:
     expect(saved).to_contain_text(f"Sawah utara {tag}")
     search.fill(f"nothing {tag}")
     expect(page.locator("#saved-empty")).to_contain_text("No saved plan has")
+
+
+def test_direction_arrows_turn_with_the_path_under_the_csp(page: Page) -> None:
+    # The Content-Security-Policy drops inline style="" attributes; the arrows are turned
+    # through the DOM instead, so they point the ways the tractor drives, not all east.
+    import_paper_field(page)
+    generate(page)
+    arrows = page.locator(".path-arrow span")
+    expect(arrows.first).to_be_attached()
+    turns = arrows.evaluate_all("els => els.map((el) => getComputedStyle(el).transform)")
+    assert "none" not in turns
+    assert len(set(turns)) >= 2  # up and down the lines at least
