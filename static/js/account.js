@@ -2,6 +2,7 @@
 // in, the organisation switch, sign-out, and the settings with API and device tokens.
 // The session lives in an HttpOnly cookie; every write sends the session's CSRF token.
 
+import { friendlyError } from "./format.js";
 import { t } from "./i18n.js";
 
 const $ = (id) => document.getElementById(id);
@@ -65,8 +66,8 @@ function askToSignIn(apiUrl, firstAccount) {
         body,
       });
       if (!answer.ok) {
-        const detail = typeof answer.data?.detail === "string" ? answer.data.detail : `HTTP ${answer.status}`;
-        $("auth-error").textContent = detail;
+        // The server words it in the page's language; the input gets its label (format.js).
+        $("auth-error").textContent = friendlyError(answer.status, answer.data?.detail).message;
         return;
       }
       screen.hidden = true;

@@ -77,6 +77,9 @@ export const INPUT_LABELS = {
   headland_passes: t("Headland passes"),
   speed_mps: t("Speed (m/s)"),
   file: t("Track file"),
+  username: t("Username"),
+  password: t("Password"),
+  organisation: t("Organisation"),
 };
 
 /** Inputs whose problem reads as the end of a sentence about them ("This file has no fix."). */

@@ -145,3 +145,21 @@ def test_english_browser_says_click_and_a_touch_screen_says_tap(
     import_paper_field(phone)
     phone.get_by_role("button", name="Set start", exact=True).click()
     expect(phone.locator("#status")).to_have_text("Tap the map where the tractor starts.")
+
+
+def test_sign_in_screen_speaks_indonesian_and_says_what_went_wrong(
+    open_map: MapPageOpener,
+) -> None:
+    page = open_map(signed_in=False, locale="id-ID", has_touch=True, is_mobile=True)
+    screen = page.locator("#auth-screen")
+    expect(screen).to_be_visible()
+    expect(screen.get_by_role("heading", name=id_("Sign in"))).to_be_visible()
+    page.get_by_label(id_("Username")).fill("nobody")
+    page.get_by_label(id_("Password")).fill("not the password")
+    with page.expect_response("**/api/auth/login") as answer:
+        screen.get_by_role("button", name=id_("Sign in")).click()
+    assert answer.value.status == 401
+    expect(page.locator("#auth-error")).to_have_text("Nama pengguna atau kata sandi salah.")
+    for control in ["#auth-username", "#auth-password", "#auth-submit"]:
+        box = page.locator(control).bounding_box()
+        assert box is not None and box["height"] >= 44, control
