@@ -103,6 +103,9 @@ class PlanStatsRead(BaseModel):
     angle_deg: float
     estimated_time_s: float
     planning_ms: float
+    coverage_given_up_pp: float = Field(
+        0.0, description="How far below the best heading's coverage the plan is, in points"
+    )
 
 
 class WaypointRead(BaseModel):

@@ -15,9 +15,10 @@ import shapely
 from shapely import Polygon
 
 from planner import angles, general, validation
-from planner.coverage import convex_chains, covered_area
+from planner.coverage import cell_area, convex_chains, covered_area
+from planner.heading_coverage import convex_coverage
 from planner.lines import from_sweep, line_positions, to_sweep
-from planner.ordering import ordered_line_ends, score_headings
+from planner.ordering import VariantLengths, ordered_line_ends, score_headings
 from planner.projection import LocalFrame, field_frame
 from planner.turns import pivot_time_s
 from planner.types import (
@@ -33,6 +34,7 @@ from planner.types import (
 )
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 #: Waypoints are rounded to 1e-9° (0.1 mm), so every export carries the same numbers.
 LONLAT_DECIMALS = 9
@@ -125,16 +127,23 @@ def plan_coverage(
         )
 
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
-    headings = angles.candidate_headings(ring_xy, fixed_heading)
-    lengths, counts = score_headings(ring_xy, headings, interval, start_xy, finish_xy)
-    best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
-    heading = float(headings[best])
-    # One convex cell: its lines end on the chains, which coverage needs as well.
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
-    chains = convex_chains(u_ring, v_ring)
-    u = line_positions(chains.u_min, chains.u_max, interval)
-    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
-    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
+
+    def lengths_of(headings: FloatArray) -> tuple[VariantLengths, IntArray]:
+        return score_headings(ring_xy, headings, interval, start_xy, finish_xy)
+
+    def coverage_of(headings: FloatArray) -> FloatArray:
+        return convex_coverage(ring_xy, headings, interval)
+
+    choice = angles.search_headings(
+        lengths_of,
+        coverage_of,
+        angles.candidate_headings(ring_xy, fixed_heading),
+        goal,
+        interval_m=interval,
+        refine=fixed_heading is None,
+    )
+    heading, variant = choice.heading_deg, choice.variant
+    u, v_lo, v_hi, coverage_ratio = _convex_plan_lines(ring_xy, heading, interval)
     route = _Route()
     if start_xy is not None:
         route.add("start", None, [start_xy])
@@ -142,8 +151,6 @@ def plan_coverage(
     if finish_xy is not None:
         route.add("finish", None, [finish_xy])
 
-    field_area_local = float(field_local.area)
-    covered = covered_area(chains, u, v_lo, v_hi, interval)
     return _assemble(
         route,
         frame=frame,
@@ -152,12 +159,26 @@ def plan_coverage(
         interval_m=interval,
         heading_deg=heading,
         line_count=len(u),
-        coverage_ratio=covered / field_area_local,
+        coverage_ratio=coverage_ratio,
+        coverage_given_up_pp=choice.coverage_given_up_pp,
         speed_mps=speed,
         track_width_m=track_width_m,
         area_m2=area_m2,
         started=started,
     )
+
+
+def _convex_plan_lines(
+    ring_xy: FloatArray, heading: float, interval_m: float
+) -> tuple[FloatArray, FloatArray, FloatArray, float]:
+    """Place a convex field's lines at ``heading`` (sweep frame); their coverage ratio (R4)."""
+    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
+    chains = convex_chains(u_ring, v_ring)
+    u = line_positions(chains.u_min, chains.u_max, interval_m)
+    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
+    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
+    covered = covered_area(chains, u, v_lo, v_hi, interval_m)
+    return u, v_lo, v_hi, covered / cell_area(chains)
 
 
 def _plan_general(
@@ -201,6 +222,7 @@ def _plan_general(
         heading_deg=plan.heading_deg,
         line_count=plan.line_count,
         coverage_ratio=plan.coverage_ratio,
+        coverage_given_up_pp=plan.coverage_given_up_pp,
         speed_mps=speed_mps,
         track_width_m=track_width_m,
         area_m2=area_m2,
@@ -266,6 +288,7 @@ def _assemble(
     heading_deg: float,
     line_count: int,
     coverage_ratio: float,
+    coverage_given_up_pp: float,
     speed_mps: float,
     track_width_m: float,
     area_m2: float,
@@ -312,6 +335,7 @@ def _assemble(
         angle_deg=round(heading_deg % 180.0, 6),
         estimated_time_s=round(estimated_time, 1),
         planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
+        coverage_given_up_pp=round(coverage_given_up_pp, 4),
     )
     return CoveragePlan(
         field_lonlat=field_lonlat,
