@@ -23,6 +23,9 @@ from planner.lines import to_sweep
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
+#: A move into a new cell is estimated at most this many intervals long.
+_NOTCH_HOP = 4.0
+
 
 @dataclass(frozen=True, slots=True)
 class HeadingScores:
@@ -70,11 +73,14 @@ class HeadingScores:
         """Working length, the turns, a line's length per extra cell.
 
         Every turn-back beyond each polygon's two ends splits or joins the sweep: another
-        cell, and a move to it about as long as a line.
+        cell, and a move to it about as long as a line (at most :data:`_NOTCH_HOP` intervals).
         """
         mean_piece = self.working_m / np.maximum(self.pieces, 1)
         extra = np.maximum(self.turn_backs - 2 * self.exteriors, 0)
-        return self.working_m + self.turns_m + extra * mean_piece
+        # The move to a new cell is about a line long, but no longer than a short hop round
+        # a notch: a comb's hundreds of teeth are neighbours, not a line apart each.
+        move = np.minimum(mean_piece, _NOTCH_HOP * interval_m)
+        return np.asarray(self.working_m + self.turns_m + extra * move)
 
 
 def score_headings(

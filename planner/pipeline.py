@@ -16,14 +16,17 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.coverage import cell_area, convex_chains, covered_area
+from planner.errors import InvalidParameterError
 from planner.heading_coverage import convex_coverage
 from planner.lines import from_sweep, line_positions, to_sweep
 from planner.ordering import VariantLengths, ordered_line_ends, score_headings
 from planner.projection import LocalFrame, field_frame
+from planner.spiral import order_spiral
 from planner.turns import pivot_time_s
 from planner.types import (
     DEFAULT_SPEED_MPS,
     DEFAULT_TRACK_WIDTH_M,
+    PATTERNS,
     CoveragePlan,
     Objective,
     PathSegment,
@@ -51,6 +54,7 @@ def plan_coverage(
     headland_passes: int = 0,
     speed_mps: float = DEFAULT_SPEED_MPS,
     track_width_m: float = DEFAULT_TRACK_WIDTH_M,
+    pattern: str = "boustrophedon",
 ) -> CoveragePlan:
     """Plan the back-and-forth tillage path over a field.
 
@@ -72,6 +76,9 @@ def plan_coverage(
         Working speed [m/s], for the time estimate.
     track_width_m : float
         Wheel track [m]; sets how long a pivot turn takes.
+    pattern : {"boustrophedon", "spiral"}
+        Adjacent lines back and forth, or rounds inward with the core back and forth
+        (:func:`planner.spiral.order_spiral`).
 
     Returns
     -------
@@ -98,6 +105,10 @@ def plan_coverage(
     passes = validation.validate_headland_passes(headland_passes)
     speed = validation.validate_speed(speed_mps)
     field_lonlat, area_m2 = validation.validate_field(field_lonlat)
+    if pattern not in PATTERNS:
+        raise InvalidParameterError("pattern", f"must be one of {', '.join(PATTERNS)}")
+    if pattern == "snake":
+        raise InvalidParameterError("pattern", "snake is not available yet")
 
     frame = field_frame(field_lonlat)
     field_local = frame.to_local(field_lonlat)
@@ -107,6 +118,35 @@ def plan_coverage(
     finish_xy = validation.validate_point(
         finish_lonlat, input_name="finish", frame=frame, field_local=field_local
     )
+    if pattern == "spiral":
+        spiral = order_spiral(
+            field_local, interval_m=interval, start_xy=start_xy, finish_xy=finish_xy, objective=goal
+        )
+        spiral_route = spiral.route
+        route = _Route(
+            x=spiral_route.x,
+            y=spiral_route.y,
+            roles=spiral_route.roles,
+            lines=spiral_route.lines,
+            segments=spiral_route.segments,
+        )
+        if finish_xy is not None:
+            route.add("finish", None, [finish_xy])
+        return _assemble(
+            route,
+            frame=frame,
+            field_lonlat=field_lonlat,
+            cells_local=spiral.cells_local,
+            interval_m=interval,
+            heading_deg=spiral.heading_deg,
+            line_count=spiral.line_count,
+            coverage_ratio=spiral.coverage_ratio,
+            coverage_given_up_pp=0.0,
+            speed_mps=speed,
+            track_width_m=track_width_m,
+            area_m2=area_m2,
+            started=started,
+        )
     # A convex field without holes or headland passes is one cell at every heading: the
     # closed-form planner takes it (tight budgets). Everything else is decomposed.
     if passes or not general.is_convex(field_local):
@@ -312,7 +352,7 @@ def _assemble(
     seg_length = distance[bounds[:, 1]] - distance[bounds[:, 0]] if len(bounds) else np.zeros(0)
     lengths = {
         kind: float(seg_length[[k == kind for k in kinds]].sum())
-        for kind in ("line", "turn", "transit", "headland")
+        for kind in ("line", "turn", "transit", "headland", "round")
     }
     points = list(zip(lon_list, lat_list, strict=True))
     segments = [
@@ -327,7 +367,7 @@ def _assemble(
         area_m2=round(area_m2, 2),
         line_count=line_count,
         waypoint_count=len(waypoints),
-        working_length_m=round(lengths["line"] + lengths["headland"], 3),
+        working_length_m=round(lengths["line"] + lengths["headland"] + lengths["round"], 3),
         turn_length_m=round(lengths["turn"], 3),
         transit_length_m=round(lengths["transit"], 3),
         path_length_m=round(path_length, 3),
