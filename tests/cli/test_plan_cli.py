@@ -23,7 +23,8 @@ def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]
 
 def test_plan_paper_field_as_gpx(tmp_path: Path) -> None:
     out = tmp_path / "plan.gpx"
-    result = run("plan", str(PAPER_FIELD), "--format", "gpx", "-o", str(out))
+    # Along the paper's rows (1°): the paper's 4 lines.
+    result = run("plan", str(PAPER_FIELD), "--angle", "1", "--format", "gpx", "-o", str(out))
     assert result.returncode == 0, result.stderr
     assert result.stdout == ""
     assert "4 lines" in result.stderr and "10 waypoints" in result.stderr
