@@ -305,3 +305,16 @@ def test_openapi_documents_every_plans_route(client: TestClient):
     assert set(paths["/api/health"]) == {"get"}
     assert "422" in paths["/api/plans"]["post"]["responses"]
     assert client.get("/docs").status_code == 200
+
+
+def test_preview_spiral_returns_rounds(client: TestClient, paper_body: dict[str, Any]):
+    response = client.post("/api/plans/preview", json={**paper_body, "pattern": "spiral"})
+    assert response.status_code == 200, response.text
+    plan = response.json()
+    kinds = [f["properties"]["kind"] for f in plan["geojson"]["features"]]
+    assert "round" in kinds and plan["request"]["pattern"] == "spiral"
+
+
+def test_preview_unknown_pattern_returns_422(client: TestClient, paper_body: dict[str, Any]):
+    response = client.post("/api/plans/preview", json={**paper_body, "pattern": "zigzag"})
+    assert response.status_code == 422
