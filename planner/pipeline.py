@@ -94,7 +94,7 @@ def plan_coverage(
     >>> from shapely import Polygon
     >>> field = Polygon([(115.298, -8.6265), (115.29813989, -8.62649238),
     ...                  (115.29814712, -8.62631751), (115.29800448, -8.62632237)])
-    >>> plan = plan_coverage(field, interval_m=4.0)
+    >>> plan = plan_coverage(field, interval_m=4.0, angle_deg=1.0)
     >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]]
     (4, ['line_start', 'line_end', 'line_start'])
     """
