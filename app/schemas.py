@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from app.models import PLAN_NAME_MAX_LENGTH
 
 Objective = Literal["shortest_path", "fewest_lines"]
+Pattern = Literal["boustrophedon", "snake", "spiral"]
 ExportFormat = Literal["gpx", "geojson", "csv", "json", "kml", "waypoints", "plan", "gpkg"]
 
 #: Largest page of ``GET /api/plans``.
@@ -85,6 +86,11 @@ class PlanCreate(BaseModel):
     objective: Objective = "shortest_path"
     headland_passes: int = Field(default=0, description="Passes around the boundary, 0–5.")
     speed_mps: float = Field(default=0.56, description="Working speed [m/s], 0.05–10.")
+    pattern: Pattern = Field(
+        default="boustrophedon",
+        description="boustrophedon (lines back and forth) or spiral (rounds inward, the core "
+        "back and forth); snake is not available yet.",
+    )
 
 
 class PlanStatsRead(BaseModel):
@@ -103,6 +109,9 @@ class PlanStatsRead(BaseModel):
     angle_deg: float
     estimated_time_s: float
     planning_ms: float
+    coverage_given_up_pp: float = Field(
+        0.0, description="How far below the best heading's coverage the plan is, in points"
+    )
 
 
 class WaypointRead(BaseModel):

@@ -115,6 +115,7 @@ def plan_field(body: PlanCreate, *, budget_s: float = DEFAULT_PLANNING_BUDGET_S)
         objective=body.objective,
         headland_passes=body.headland_passes,
         speed_mps=body.speed_mps,
+        pattern=body.pattern,
     )
     name = (body.name or "").strip() or (spec.name or "").strip() or None
     if name is not None:
@@ -129,6 +130,7 @@ def plan_field(body: PlanCreate, *, budget_s: float = DEFAULT_PLANNING_BUDGET_S)
         "objective": body.objective,
         "headland_passes": body.headland_passes,
         "speed_mps": body.speed_mps,
+        "pattern": body.pattern,
     }
     return Plan(
         name=name,
