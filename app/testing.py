@@ -143,6 +143,7 @@ def running_server(
     log: Path | None = None,
     serve_args: Sequence[str] = (),
     timeout_s: float = 60.0,
+    first_account: bool = True,
 ) -> Iterator[ServerUrl]:
     """Serve the app with ``tillpath serve`` until the block ends; yield its base URL.
 
@@ -159,13 +160,20 @@ def running_server(
         More ``tillpath serve`` options, e.g. ``("--workers", "1")``.
     timeout_s : float
         How long to wait for ``/api/health`` [s].
+    first_account : bool
+        Give the database its first account before the server starts; without it the
+        server asks for one (``url.account`` then names an account that does not exist).
 
     Raises
     ------
     ServerStartError
         If the server exits or does not answer in time (with its log, if kept).
     """
-    account = seed_account(database_url)
+    account = (
+        seed_account(database_url)
+        if first_account
+        else Account(TEST_USERNAME, TEST_PASSWORD, 0, "tp_no-account-yet")
+    )
     port = free_port()
     base = ServerUrl(f"http://127.0.0.1:{port}", account)
     env = {
