@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 import urllib.request
+import uuid
 from collections.abc import Iterator
 from typing import Any
 
@@ -121,3 +122,27 @@ def test_settings_show_tokens_with_when_they_were_last_used(
     expect(tokens).to_contain_text("last used never")
     page.get_by_role("button", name="Revoke tractor 7").click()
     expect(page.get_by_role("button", name="Revoke tractor 7")).to_have_count(0)
+
+
+def test_a_field_of_the_registry_is_planned_again_from_the_list(
+    open_map: MapPageOpener, server_url: ServerUrl
+) -> None:
+    field = json.loads(PAPER_FIELD.read_text())
+    name = f"Registry field {uuid.uuid4().hex[:6]}"
+    made = api(server_url, "POST", "/api/fields", {"name": name, "boundary": field})
+    page = open_map()
+    item = page.locator(f"#fields-list li[data-id='{made['id']}']")
+    expect(item.locator(".plan-meta")).to_have_text("0 plans")
+    item.get_by_role("button", name=f"Plan {name}").click()
+    expect(page.get_by_label("Plan name")).to_have_value(name)
+    page.get_by_label("Interval (m)").fill("4")
+    with page.expect_response(lambda r: r.url.endswith("/api/plans") and r.status == 201) as info:
+        page.get_by_role("button", name="Save plan").click()
+    saved = info.value.json()
+    assert saved["field_id"] == made["id"]  # the same boundary: the registry's field, reused
+    expect(item.locator(".plan-meta")).to_have_text("1 plans")
+    # Deleting it asks what becomes of its plans; keeping them keeps the plan.
+    item.get_by_role("button", name=f"Delete {name}").click()
+    item.get_by_role("button", name="Delete field, keep plans").click()
+    expect(page.locator(f"#fields-list li[data-id='{made['id']}']")).to_have_count(0)
+    assert api(server_url, "GET", f"/api/plans/{saved['id']}")["field_id"] is None
