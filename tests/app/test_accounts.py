@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import pytest
@@ -318,3 +319,15 @@ def test_create_user_adds_membership_and_keeps_password(session: Session):
         )
     }
     assert roles == {"coop": "owner", "farm": "viewer"}
+
+
+def test_a_cross_site_form_cannot_sign_a_browser_in(app: FastAPI, workspace: Workspace):
+    # Login CSRF: a form can send text/plain or urlencoded bodies, never application/json.
+    browser = TestClient(app)
+    body = json.dumps({"username": "owner", "password": TEST_PASSWORD})
+    for content_type in ("text/plain", "application/x-www-form-urlencoded"):
+        response = browser.post(
+            "/api/auth/login", content=body, headers={"Content-Type": content_type}
+        )
+        assert response.status_code == 422, (content_type, response.text)
+        assert "set-cookie" not in response.headers
