@@ -118,3 +118,40 @@ class TokenList(BaseModel):
     """The tokens the user may see and revoke."""
 
     items: list[TokenRead]
+
+
+class MemberRead(BaseModel):
+    """A member of the organisation and their role."""
+
+    user_id: int
+    username: str
+    role: RoleName
+
+
+class MemberList(BaseModel):
+    """The organisation's members, by username."""
+
+    items: list[MemberRead]
+
+
+class MemberCreate(BaseModel):
+    """Body of ``POST /api/members``: add a user (made when a password is given) with a role."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    username: str = Field(min_length=1, max_length=NAME_MAX_LENGTH)
+    role: RoleName = "viewer"
+    password: str | None = Field(
+        default=None,
+        max_length=1024,
+        description="For a new user: their password (at least 8 characters). An existing "
+        "user keeps theirs.",
+    )
+
+
+class MemberUpdate(BaseModel):
+    """Body of ``PATCH /api/members/{user_id}``."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    role: RoleName

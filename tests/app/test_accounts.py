@@ -331,3 +331,32 @@ def test_a_cross_site_form_cannot_sign_a_browser_in(app: FastAPI, workspace: Wor
         )
         assert response.status_code == 422, (content_type, response.text)
         assert "set-cookie" not in response.headers
+
+
+def test_owners_manage_members_and_keep_an_owner(
+    client: TestClient, app: FastAPI, workspace: Workspace
+):
+    made = client.post(
+        "/api/members",
+        json={"username": "newcomer", "role": "planner", "password": "a long password"},
+    )
+    assert made.status_code == 201 and made.json()["role"] == "planner"
+    names = {m["username"]: m["role"] for m in client.get("/api/members").json()["items"]}
+    assert names == {
+        "newcomer": "planner",
+        "owner": "owner",
+        "planner": "planner",
+        "viewer": "viewer",
+    }
+    newcomer, _csrf = sign_in(app, "newcomer", "a long password")
+    assert newcomer.get("/api/plans").status_code == 200
+    unknown = client.post("/api/members", json={"username": "ghost", "role": "viewer"})
+    assert unknown.status_code == 422 and "give a password" in unknown.json()["detail"]
+
+    owner_id = workspace.users["owner"].id
+    last = client.patch(f"/api/members/{owner_id}", json={"role": "viewer"})
+    assert last.status_code == 409 and "no owner left" in last.json()["detail"]
+    assert client.delete(f"/api/members/{owner_id}").status_code == 409
+    user_id = made.json()["user_id"]
+    assert client.delete(f"/api/members/{user_id}").status_code == 204
+    assert newcomer.get("/api/plans").status_code == 403  # belongs to no organisation now
