@@ -19,6 +19,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from app.auth import (
+    MAX_ID,
     Access,
     new_api_token,
     new_secret,
@@ -407,6 +408,8 @@ def list_members(session: Session, organisation_id: int) -> list[tuple[User, Mem
 
 
 def _membership(session: Session, organisation_id: int, user_id: int) -> Membership:
+    if not 1 <= user_id <= MAX_ID:  # not a 32-bit key: no such member (and no SQL error)
+        raise NotFoundError("member", user_id)
     found = session.scalar(
         select(Membership).where(
             Membership.organisation_id == organisation_id, Membership.user_id == user_id

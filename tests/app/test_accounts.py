@@ -360,3 +360,11 @@ def test_owners_manage_members_and_keep_an_owner(
     user_id = made.json()["user_id"]
     assert client.delete(f"/api/members/{user_id}").status_code == 204
     assert newcomer.get("/api/plans").status_code == 403  # belongs to no organisation now
+
+
+def test_member_ids_beyond_32_bits_are_404(client: TestClient):
+    # Found by schemathesis: such an id reached the database and failed there (500).
+    huge = 1264658853214972534587392
+    assert client.patch(f"/api/members/{huge}", json={"role": "viewer"}).status_code == 404
+    assert client.delete(f"/api/members/{huge}").status_code == 404
+    assert client.delete(f"/api/tokens/{huge}").status_code == 404
