@@ -15,7 +15,7 @@ import time
 import urllib.error
 import urllib.request
 import uuid
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -144,6 +144,7 @@ def running_server(
     serve_args: Sequence[str] = (),
     timeout_s: float = 60.0,
     first_account: bool = True,
+    env: Mapping[str, str] | None = None,
 ) -> Iterator[ServerUrl]:
     """Serve the app with ``tillpath serve`` until the block ends; yield its base URL.
 
@@ -163,6 +164,8 @@ def running_server(
     first_account : bool
         Give the database its first account before the server starts; without it the
         server asks for one (``url.account`` then names an account that does not exist).
+    env : mapping, optional
+        More environment variables of the server (``TILLPATH_*`` settings).
 
     Raises
     ------
@@ -181,6 +184,7 @@ def running_server(
         "TILLPATH_DATABASE_URL": database_url,
         "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
         "TILLPATH_STREET_TILE_URL": NO_TILES,
+        **(env or {}),
     }
     command = [
         *tillpath_command(),

@@ -27,6 +27,8 @@ from tests.databases import DATABASES, scratch_pg_database
 ROOT = Path(__file__).resolve().parents[2]
 ANSWER_WITHIN_S = 2.0
 HEALTH_WITHIN_S = 1.0
+#: The served app's planning budget: well inside ANSWER_WITHIN_S, for a busy machine.
+BUDGET = {"TILLPATH_PLANNING_BUDGET_S": "1"}
 
 
 @pytest.fixture(scope="module", params=DATABASES)
@@ -40,13 +42,14 @@ def served(
             f"sqlite:///{workdir / 't.db'}",
             log=workdir / "serve.log",
             serve_args=["--no-access-log"],
+            env=BUDGET,
         ) as url:
             yield url
         get_engine.cache_clear()
         return
     with scratch_pg_database("tillpath_hardening") as db_url:
         with running_server(
-            db_url, log=workdir / "serve.log", serve_args=["--no-access-log"]
+            db_url, log=workdir / "serve.log", serve_args=["--no-access-log"], env=BUDGET
         ) as url:
             yield url
         get_engine.cache_clear()
@@ -127,7 +130,7 @@ def test_comb_shaped_field_is_answered_within_the_budget(served: ServerUrl):
     assert seconds < ANSWER_WITHIN_S, seconds
     assert max(health) < HEALTH_WITHIN_S, health
     if response.status_code == 422:  # planned within the budget is fine too (a faster planner)
-        assert "limit of 1.5 s per request" in response.json()["detail"]
+        assert "limit of 1 s per request" in response.json()["detail"]
         assert "1,998 vertices" in response.json()["detail"]
     else:
         assert response.status_code == 200, response.text
