@@ -72,6 +72,8 @@ def register(cli: typer.Typer) -> None:
         """Migrate the database, then serve the map page and the API (uvicorn)."""
         import uvicorn
 
+        from app.budget import warm_up
+
         shown = upgrade()
         typer.echo(f"database {shown} is up to date; serving on http://{host}:{port}", err=True)
         if _needs_first_account():
@@ -80,6 +82,7 @@ def register(cli: typer.Typer) -> None:
                 "(or run `tillpath users create NAME --password-stdin`)",
                 err=True,
             )
+        warm_up()
         uvicorn.run(
             "app.main:create_app",
             factory=True,
