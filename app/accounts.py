@@ -312,7 +312,8 @@ def authenticate_password(session: Session, username: str, password: str, addres
     SignInError
         If either is wrong (the same answer, and about the same time, for both).
     """
-    name = username.strip()[:NAME_MAX_LENGTH]
+    # No stored name has a NUL (check_username); PostgreSQL could not even compare one.
+    name = username.replace("\x00", "").strip()[:NAME_MAX_LENGTH]
     _check_throttle(session, name, address)
     user = session.scalar(select(User).where(User.username == name))
     ok = verify_password(

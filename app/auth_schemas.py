@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.auth_models import NAME_MAX_LENGTH
+from app.schemas import StoredText
 
 RoleName = Literal["viewer", "planner", "owner"]
 
@@ -28,7 +29,7 @@ class SignUpBody(BaseModel):
 
     username: str = Field(min_length=1, max_length=NAME_MAX_LENGTH)
     password: str = Field(min_length=8, max_length=1024)
-    organisation: str = Field(
+    organisation: StoredText = Field(
         default="default",
         min_length=1,
         max_length=NAME_MAX_LENGTH,
@@ -85,7 +86,7 @@ class TokenCreate(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    name: str = Field(default="", max_length=NAME_MAX_LENGTH, description="A label.")
+    name: StoredText = Field(default="", max_length=NAME_MAX_LENGTH, description="A label.")
     device: bool = Field(
         default=False,
         description="A device token for a tractor's logger: posts fixes to live runs of the "

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from contextlib import ExitStack
 from typing import Any
 
 import pytest
@@ -20,17 +21,26 @@ from schemathesis.checks import not_a_server_error
 from app.db import get_engine
 from app.main import create_app
 from app.testing import ServerUrl, running_server
+from tests.databases import DATABASES, scratch_pg_database
 
 #: Generated requests per operation (``TILLPATH_SCHEMATHESIS_EXAMPLES`` overrides it).
 MAX_EXAMPLES = int(os.environ.get("TILLPATH_SCHEMATHESIS_EXAMPLES", "12"))
 
 
-@pytest.fixture(scope="module")
-def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ServerUrl]:
+@pytest.fixture(scope="module", params=DATABASES)
+def served(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[ServerUrl]:
+    """``tillpath serve`` on each database, with a plan, a live run and a fix in it."""
     workdir = tmp_path_factory.mktemp("schemathesis")
-    with running_server(
-        f"sqlite:///{workdir / 't.db'}", log=workdir / "serve.log", serve_args=["--no-access-log"]
-    ) as url:
+    with ExitStack() as stack:
+        if request.param == "sqlite":
+            db_url = f"sqlite:///{workdir / 't.db'}"
+        else:
+            db_url = stack.enter_context(scratch_pg_database("tillpath_schemathesis"))
+        url = stack.enter_context(
+            running_server(db_url, log=workdir / "serve.log", serve_args=["--no-access-log"])
+        )
         # A plan, a live run with a fix and a field, so that ids 1 exist for the generator.
         session = requests.Session()
         session.headers.update(url.headers)
