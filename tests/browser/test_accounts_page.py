@@ -127,7 +127,12 @@ def test_settings_show_tokens_with_when_they_were_last_used(
 def test_a_field_of_the_registry_is_planned_again_from_the_list(
     open_map: MapPageOpener, server_url: ServerUrl
 ) -> None:
-    field = json.loads(PAPER_FIELD.read_text())
+    # A boundary of this test only: with the same boundary stored twice, a drawn plan is
+    # attached to the older field.
+    shift = int(uuid.uuid4().hex[:4], 16) * 1e-7
+    polygon = json.loads(PAPER_FIELD.read_text())["features"][0]["geometry"]
+    ring = [[lon + shift, lat] for lon, lat in polygon["coordinates"][0]]
+    field = {"type": "Polygon", "coordinates": [ring]}
     name = f"Registry field {uuid.uuid4().hex[:6]}"
     made = api(server_url, "POST", "/api/fields", {"name": name, "boundary": field})
     page = open_map()
