@@ -233,6 +233,8 @@ def _problem(error: Mapping[str, Any]) -> str:
     if kind in ("too_long", "string_too_long"):
         limit = ctx.get("max_length")
         return f"is too long (at most {limit} characters)" if limit else "is too long"
+    if kind == "value_error" and ctx.get("error") is not None:
+        return str(ctx["error"])  # a validator's own sentence
     if kind in ("too_short", "string_too_short"):
         return "is too short"
     if kind == "greater_than_equal":

@@ -9,7 +9,17 @@ from fastapi import FastAPI
 from starlette.middleware.gzip import GZipMiddleware
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
-from app.routers import auth, field_files, fields, health, pages, plans, runs, simulations
+from app.routers import (
+    auth,
+    field_files,
+    fields,
+    health,
+    members,
+    pages,
+    plans,
+    runs,
+    simulations,
+)
 from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
 
@@ -37,7 +47,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         description=(
             "Plan back-and-forth coverage paths over a field, store them and download their "
             "waypoints. Coordinates are WGS84 `[lon, lat]`; errors are "
-            '`{"detail": "<input>: <problem>"}`.'
+            '`{"detail": "<input>: <problem>"}`.\n\n'
+            "Every route but health, sign-in and the page needs a token "
+            "(`Authorization: Bearer …`) or the page's session cookie, whose writes also send "
+            "`X-CSRF-Token`. A request acts in one organisation: `X-Organisation: <id>` if "
+            "given, else the one chosen on the page, else the user's first. Another "
+            "organisation's rows are 404; a missing role is 403 (docs/accounts.md)."
         ),
         version="0.1.0",
         # /docs is served offline by the pages router; ReDoc would need a CDN.
@@ -56,6 +71,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router, prefix=API_PREFIX)
     app.include_router(auth.router, prefix=API_PREFIX)
     app.include_router(fields.router, prefix=API_PREFIX)
+    app.include_router(members.router, prefix=API_PREFIX)
     register_error_handlers(app)
     app.add_middleware(
         BodySizeLimitMiddleware,

@@ -8,9 +8,9 @@ command line and the planner give the same message for the same mistake.
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from app.models import PLAN_NAME_MAX_LENGTH
 
@@ -22,6 +22,17 @@ ExportFormat = Literal["gpx", "geojson", "csv", "json", "kml", "waypoints", "pla
 MAX_PAGE_SIZE = 200
 
 Position = tuple[float, float]
+
+
+def _no_nul(value: str) -> str:
+    """Refuse NUL characters: PostgreSQL text cannot hold them (it would be a 500)."""
+    if "\x00" in value:
+        raise ValueError("must not contain NUL characters")
+    return value
+
+
+#: Text a person typed that is stored: any characters but NUL.
+StoredText = Annotated[str, AfterValidator(_no_nul)]
 
 
 class PlanCreate(BaseModel):
@@ -54,7 +65,7 @@ class PlanCreate(BaseModel):
         },
     )
 
-    name: str | None = Field(
+    name: StoredText | None = Field(
         default=None,
         max_length=PLAN_NAME_MAX_LENGTH,
         description="Plan name; default: the field's `name` property, if any.",

@@ -102,6 +102,8 @@ def register(cli: typer.Typer) -> None:
         """Migrate the database, then serve the map page and the API (uvicorn)."""
         import uvicorn
 
+        from app.budget import warm_up
+
         check_tls_files(certfile, keyfile)
         shown = upgrade()
         scheme = "https" if certfile else "http"
@@ -117,6 +119,7 @@ def register(cli: typer.Typer) -> None:
                 "(or run `tillpath users create NAME --password-stdin`)",
                 err=True,
             )
+        warm_up()
         uvicorn.run(
             "app.main:create_app",
             factory=True,
