@@ -26,9 +26,7 @@ def test_simulate_draws_the_true_track_and_shows_its_metrics(page: Page) -> None
     plan = save(page, f"Simulate {uuid.uuid4().hex[:6]}")
     page.get_by_label("Guidance").select_option("line")
     with page.expect_response(
-        lambda r: (
-            r.request.method == "GET" and "/api/simulations/" in urlsplit(r.url).path
-        ),
+        lambda r: r.request.method == "GET" and "/api/simulations/" in urlsplit(r.url).path,
         timeout=60_000,
     ) as answer:
         button(page, "Simulate").click()
