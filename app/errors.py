@@ -107,6 +107,10 @@ class ThrottledError(PermissionError):
         self.headers = {"Retry-After": str(retry_after_s)}
 
 
+class UnavailableError(RuntimeError):
+    """The server cannot do this now or in this setup (no job engine): 503."""
+
+
 #: The one table: exception class -> HTTP status. Looked up along the class's MRO, so a
 #: subclass without its own row gets its parent's status.
 STATUS_CODES: Final[dict[type[Exception], int]] = {
@@ -123,6 +127,7 @@ STATUS_CODES: Final[dict[type[Exception], int]] = {
     RequestValidationError: 422,
     NotFoundError: 404,
     BodyTooLargeError: 413,
+    UnavailableError: 503,
 }
 
 #: What FastAPI says when the body is not JSON it can decode (bad UTF-8, nesting too deep).

@@ -189,6 +189,8 @@ GuidanceMode = Literal["waypoint", "line"]
 
 #: Largest seed accepted (numpy takes any non-negative integer; this keeps it in a JSON int).
 MAX_SEED = 2**63 - 1
+#: Most Monte Carlo runs one web request may ask for (a background job, product.md §13).
+MAX_WEB_RUNS = 500
 
 
 class SimulationCreate(BaseModel):
@@ -206,6 +208,13 @@ class SimulationCreate(BaseModel):
     guidance: GuidanceMode = Field(
         default="waypoint",
         description="`waypoint` (the paper's law) or `line` (pure pursuit along the plan).",
+    )
+    runs: int = Field(
+        default=1,
+        ge=1,
+        le=MAX_WEB_RUNS,
+        description="Monte Carlo runs over seeds `seed … seed+runs-1`; more than one gives a "
+        "summary of each metric and stores the run of median cross-track RMS.",
     )
 
 

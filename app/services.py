@@ -13,6 +13,7 @@ import json
 import math
 import re
 import unicodedata
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final, TypeVar
 
@@ -266,7 +267,13 @@ def polygon_to_geojson(polygon: Polygon) -> dict[str, Any]:
     }
 
 
-def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = None) -> Simulation:
+def simulate_plan(
+    plan: Plan,
+    body: SimulationCreate,
+    *,
+    date: dt.date | None = None,
+    on_waypoint: Callable[[int, int], None] | None = None,
+) -> Simulation:
     """Drive stored ``plan`` with the simulated tractor; return an unsaved :class:`Simulation`.
 
     Parameters
@@ -278,6 +285,8 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
     date : date, optional
         Date of the run, for the magnetic declination; default today (UTC). It is stored in
         the configuration, so the run can be repeated exactly.
+    on_waypoint : callable, optional
+        Progress hook, passed to :func:`navigation.simulate`.
 
     Returns
     -------
@@ -290,7 +299,12 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
     """
     date = date or utc_now().date()
     config = SimulationConfig(gps=body.gps, guidance=GuidanceParams(mode=body.guidance), date=date)
-    log = simulate(coverage_plan_from_row(plan), config, np.random.default_rng(body.seed))
+    log = simulate(
+        coverage_plan_from_row(plan),
+        config,
+        np.random.default_rng(body.seed),
+        on_waypoint=on_waypoint,
+    )
     return Simulation(
         plan_id=plan.id,
         organisation_id=plan.organisation_id,

@@ -1,16 +1,19 @@
-"""Simulations: drive a stored plan with the simulated tractor (product.md §5, §7)."""
+"""Simulations: drive a stored plan with the simulated tractor (product.md §5, §7, §13)."""
 
 from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Response, status
+from fastapi import APIRouter, Query, Request, Response, status
 
 from app import services
 from app.auth import Planner, Viewer
 from app.db import SessionDep
 from app.display import TrackDetail, display_tracks
-from app.models import Simulation
+from app.jobs import get_jobs, submit_job
+from app.jobs.schemas import JobRead
+from app.jobs.simulations import simulation_params
+from app.models import Job, Simulation, utc_now
 from app.schemas import (
     ErrorRead,
     SimulationCreate,
@@ -42,28 +45,38 @@ def _answer(simulation: Simulation, tracks: TrackDetail) -> Simulation | Simulat
 
 @router.post(
     "/plans/{plan_id}/simulations",
-    response_model=SimulationRead,
-    status_code=status.HTTP_201_CREATED,
-    responses={**_BAD_INPUT, **_NOT_FOUND},
+    response_model=JobRead,
+    status_code=status.HTTP_202_ACCEPTED,
+    responses={
+        **_BAD_INPUT,
+        **_NOT_FOUND,
+        503: {"model": ErrorRead, "description": "The server runs no job engine"},
+    },
 )
 def create_simulation(
     plan_id: int,
     session: SessionDep,
     access: Planner,
+    request: Request,
     response: Response,
     body: SimulationCreate | None = None,
-    tracks: TracksQuery = "full",
-) -> Simulation | SimulationRead:
-    """Simulate the tractor driving a stored plan; store and return the run.
+) -> Job:
+    """Simulate the tractor driving a stored plan, as a background job (product.md §13).
 
-    The body is optional (defaults: seed 0, `m8n`, `waypoint`).
+    Answers 202 at once with the job and `Location: /api/jobs/{id}`; the job's `result_url`
+    names the stored simulation when it is done. With `runs` > 1 it is a Monte Carlo batch
+    over seeds `seed … seed+runs-1`: the result summarises each metric, and the stored
+    simulation is the run of median cross-track RMS. The body is optional (defaults: seed 0,
+    `m8n`, `waypoint`, one run).
     """
     plan = services.read_plan(session, plan_id, access)
-    simulation = services.simulate_plan(plan, body or SimulationCreate())
-    session.add(simulation)
-    session.commit()
-    response.headers["Location"] = f"/api/simulations/{simulation.id}"
-    return _answer(simulation, tracks)
+    jobs = get_jobs(request)  # after the plan: a missing plan is 404 whatever the engine
+    body = body or SimulationCreate()
+    kind = "monte_carlo" if body.runs > 1 else "simulation"
+    params = simulation_params(plan.id, body, utc_now().date())
+    job = submit_job(session, jobs, access, kind, params)
+    response.headers["Location"] = f"/api/jobs/{job.id}"
+    return job
 
 
 @router.get(

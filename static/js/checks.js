@@ -7,6 +7,8 @@
 
 import { formatDate, formatDuration, formatMetres, formatPercent } from "./format.js";
 import { t, tn } from "./i18n.js";
+import { ApiError } from "./api.js";
+import { JobCancelled, JobFailed, followJob, jobProgress } from "./jobs.js";
 
 /** How often a live run is fetched again [ms]. */
 export const LIVE_POLL_MS = 3000;
@@ -55,6 +57,20 @@ function fillFigures(container, metrics, extra = {}) {
   }
 }
 
+/** One sentence on a Monte Carlo batch: completion and the cross-track RMS's spread. */
+function summaryText(summary, runs) {
+  const rms = summary?.cross_track_rms_m;
+  const completed = formatPercent(summary?.completed_share);
+  if (!rms) return t("{runs} runs, {completed} completed.", { runs: String(runs), completed });
+  return t("{runs} runs, {completed} completed; cross-track RMS {median} median, {p5} to {p95} (5th to 95th percentile).", {
+    runs: String(runs),
+    completed,
+    median: formatMetres(rms.median),
+    p5: formatMetres(rms.p5),
+    p95: formatMetres(rms.p95),
+  });
+}
+
 function stretchesText(metrics) {
   if (!metrics) return "–";
   const n = metrics.stretches.length;
@@ -84,6 +100,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     card: $("check"),
     gps: $("sim-gps"),
     guidance: $("sim-guidance"),
+    runsCount: $("sim-runs"),
+    summary: $("simulation-summary"),
     simulate: $("simulate"),
     upload: $("upload-track"),
     file: $("track-file"),
@@ -100,6 +118,10 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     runsEmpty: $("runs-empty"),
   };
   const state = { planId: null, simLayer: null, runLayer: null, runId: null, timer: null, seq: 0 };
+  const progress = jobProgress(
+    { box: $("sim-job"), bar: $("sim-progress"), label: $("sim-progress-label"), cancel: $("sim-cancel") },
+    (id) => api.cancelJob(id),
+  );
 
   function setEnabled() {
     const enabled = state.planId != null;
@@ -129,7 +151,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     ui.run.hidden = true;
   }
 
-  function showSimulation(simulation) {
+  function showSimulation(simulation, result = null) {
     clearSimulation();
     const track = simulation.tracks.features.find((f) => f.properties?.source === "true");
     state.simLayer = L.polyline(latLngs(track.geometry.coordinates), {
@@ -138,7 +160,13 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
       className: "simulated-track",
     }).addTo(map);
     const { gps, guidance, seed } = simulation.config;
-    ui.simulationTitle.textContent = simulationLabel(simulation.config);
+    const runs = result?.runs ?? 1;
+    ui.simulationTitle.textContent =
+      runs > 1
+        ? t("{label}: the median of {runs} runs", { label: simulationLabel(simulation.config), runs: String(runs) })
+        : simulationLabel(simulation.config);
+    ui.summary.hidden = runs <= 1;
+    if (runs > 1) ui.summary.textContent = summaryText(result.summary, runs);
     fillFigures(ui.simulation, simulation.metrics);
     ui.simulationGpx.href = api.simulationGpxUrl(simulation.id);
     ui.simulationKml.href = api.simulationKmlUrl(simulation.id);
@@ -296,28 +324,52 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     if (planId == null) return;
     clearError();
     const seq = ++state.seq;
+    const runs = Math.min(500, Math.max(1, Math.round(Number(ui.runsCount.value) || 1)));
+    ui.runsCount.value = String(runs);
+    const what = runs > 1 ? t("Simulating {runs} runs", { runs: String(runs) }) : t("Simulating the tractor");
     ui.simulate.disabled = true;
     ui.card.setAttribute("aria-busy", "true");
-    setStatus(t("Simulating the tractor…"), { sticky: true });
+    setStatus(`${what}…`, { sticky: true });
     try {
       const body = {
         seed: Math.floor(Math.random() * 1_000_000),
         gps: ui.gps.value,
         guidance: ui.guidance.value,
+        runs,
       };
-      const simulation = await api.simulate(planId, body);
+      const started = await api.simulate(planId, body);
+      const job = await followJob(api, started, {
+        onProgress: (current) => {
+          if (seq === state.seq) progress.show(current, what);
+        },
+        stillWanted: () => seq === state.seq && planId === state.planId,
+      });
+      if (job == null || seq !== state.seq || planId !== state.planId) return;
+      const simulation = await api.readSimulation(job.result.simulation_id);
       if (seq !== state.seq || planId !== state.planId) return;
-      showSimulation(simulation);
-      onResult(t("Simulated run: {time}.", { time: formatDuration(simulation.metrics.time_s) }));
+      showSimulation(simulation, job.result);
+      onResult(
+        runs > 1
+          ? t("Simulated {runs} runs; the median run took {time}.", { runs: String(runs), time: formatDuration(simulation.metrics.time_s) })
+          : t("Simulated run: {time}.", { time: formatDuration(simulation.metrics.time_s) }),
+      );
       refreshRuns();
     } catch (error) {
       if (seq === state.seq) {
-        setStatus("");
-        showFailure(error);
+        if (error instanceof JobCancelled) {
+          setStatus(t("Simulation cancelled."));
+        } else {
+          setStatus("");
+          // A failed job's message names the input and the problem, as a 422 does.
+          showFailure(error instanceof JobFailed ? new ApiError(422, error.message) : error);
+        }
       }
     } finally {
-      ui.card.setAttribute("aria-busy", "false");
-      setEnabled();
+      if (seq === state.seq) {
+        progress.hide();
+        ui.card.setAttribute("aria-busy", "false");
+        setEnabled();
+      }
     }
   }
 
@@ -357,6 +409,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
       if (planId === state.planId) return;
       state.planId = planId;
       state.seq += 1;
+      progress.hide();
+      ui.card.setAttribute("aria-busy", "false");
       clearSimulation();
       clearRun();
       setEnabled();

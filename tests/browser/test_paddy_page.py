@@ -182,7 +182,10 @@ def test_a_drawn_bow_tie_is_refused_in_words(page: Page) -> None:
 def test_simulations_are_listed_with_their_plan_after_a_reload(page: Page) -> None:
     import_paper_field(page)
     plan = save(page, f"Listed {uuid.uuid4().hex[:6]}")
-    with page.expect_response(lambda r: "/simulations" in r.url and r.status == 201) as answer:
+    # The simulation is a job: the page reads the stored simulation when the job is done.
+    with page.expect_response(
+        lambda r: "/api/simulations/" in r.url and r.status == 200, timeout=60_000
+    ) as answer:
         button(page, "Simulate").click()
     simulation = answer.value.json()
     page.reload()
