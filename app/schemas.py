@@ -230,14 +230,35 @@ class MetricsRead(BaseModel):
     cross_track_max_m: float | None
     cross_track_rms_m: float | None
     cross_track_p95_m: float | None
-    waypoint_error_max_m: float
-    waypoint_error_mean_m: float
-    waypoint_errors_m: list[float]
+    turn_cross_track_max_m: float | None = None
+    turn_cross_track_rms_m: float | None = None
+    waypoint_error_max_m: float | None
+    waypoint_error_mean_m: float | None
+    line_waypoint_error_max_m: float | None = None
+    waypoint_errors_m: list[float | None]
+    waypoints_reached: int | None = None
+    plan_progress: float | None = None
     coverage_ratio: float
+    coverage_of_driven_ratio: float | None = None
+    implement_width_m: float | None = None
     threshold_m: float
     stretches: list[StretchRead]
     filter_rms_m: float | None = None
     gps_rms_m: float | None = None
+    waypoint_error_estimate_max_m: float | None = None
+    waypoint_error_estimate_mean_m: float | None = None
+    line_waypoint_error_estimate_max_m: float | None = None
+    waypoint_errors_estimate_m: list[float | None] | None = None
+    nees_mean: float | None = None
+    nees_dof: int | None = None
+    nees_bounds_95: list[float] | None = None
+    nees_within_bounds: bool | None = None
+    nis_mean: float | None = None
+    nis_dof: int | None = None
+    nis_bounds_95: list[float] | None = None
+    nis_within_bounds: bool | None = None
+    compass_bias_estimate_deg: float | None = None
+    compass_bias_true_deg: float | None = None
 
 
 class SimulationRead(BaseModel):
