@@ -188,8 +188,16 @@ def _preset(
     )
 
 
-#: u-blox NEO-M8N: 2.5 m CEP at 5 Hz, mostly a slow wander (multipath, atmosphere) with a
-#: correlation time of tens of seconds; RTK: 2 cm CEP, mostly white.
+#: The receivers (sources and assumptions in docs/simulation.md):
+#: - ``m8n``: u-blox NEO-M8N, 2.5 m CEP (NEO-M8 data sheet UBX-15031086, GPS & GLONASS,
+#:   autonomous; the paper's Table 2), 5 Hz (a configured rate; the data sheet allows up to
+#:   10 Hz with two constellations). The error is mostly a slow wander: static tests of
+#:   single-frequency receivers show autocorrelations that bend at about a minute (Wilson,
+#:   "GPS accuracy", Garmin 12XL 20-day test; Soundy et al., Sensors 2020, 20, 6050, favour an
+#:   Ornstein–Uhlenbeck model). The 60 s and the 30 % white share are assumptions of that
+#:   order, not an M8N measurement: fit your own with ``tillpath simulate --gps-from LOG``.
+#: - ``rtk``: an RTK fix, 2 cm CEP (u-blox ZED-F9P data sheet: 0.01 m + 1 ppm CEP, i.e. a
+#:   baseline of about 10 km), 5 Hz, mostly white; its 10 s correlation is an assumption.
 GPS_PRESETS: dict[str, GpsParams] = {
     "m8n": _preset("m8n", rate_hz=5.0, cep_m=2.5, white_share=0.3, tau_s=60.0),
     "rtk": _preset("rtk", rate_hz=5.0, cep_m=0.02, white_share=0.7, tau_s=10.0),
