@@ -323,6 +323,11 @@ class FixIn(BaseModel):
     lon: float = Field(ge=-180, le=180, description="Longitude, WGS84 [deg].")
     heading_deg: float | None = Field(default=None, description="Heading from true north [deg].")
     speed_mps: float | None = Field(default=None, description="Speed over ground [m/s].")
+    quality: Literal["rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning"] | None = Field(
+        default=None, description="Fix quality, as the receiver reported it."
+    )
+    hdop: float | None = Field(default=None, ge=0, description="Horizontal dilution of precision.")
+    satellites: int | None = Field(default=None, ge=0, le=255, description="Satellites used.")
 
 
 class FixesAdded(BaseModel):
@@ -379,4 +384,16 @@ class RunRead(RunSummary):
     )
     stretches: dict[str, Any] = Field(
         description="GeoJSON FeatureCollection: a LineString per stretch over the threshold."
+    )
+    receiver: dict[str, Any] = Field(
+        default_factory=dict,
+        description="How good the fixes were: `shares` of each fix quality (rtk_fixed, "
+        "rtk_float, dgps, single, dead_reckoning, unknown), `hdop_median`, "
+        "`satellites_median`, `accuracy` (centimetre, decimetre, metre, unknown), "
+        "`metre_level` and a `note` saying what the figures are worth.",
+    )
+    missed: dict[str, Any] = Field(
+        default_factory=dict,
+        description="GeoJSON FeatureCollection: a Polygon per piece of the field the run's "
+        "implement footprint did not cover (`kind: missed`, `area_m2`).",
     )
