@@ -28,6 +28,8 @@ TARGET_RASTER_CELLS = 250_000
 MAX_RASTER_CELLS = 4_000_000
 #: Cells are at most this fraction of the implement width.
 RASTER_CELLS_PER_INTERVAL = 8
+#: Track vertices per buffered piece of the exact footprint (:func:`missed_ground`).
+FOOTPRINT_PIECE = 200
 
 
 def implement_width_m(plan: CoveragePlan) -> float:
@@ -188,8 +190,20 @@ def missed_ground(
     width = implement_width_m(plan)
     min_width = 0.1 * width if min_width_m is None else min_width_m
     if len(x_m) >= 2:
-        track = shapely.LineString(np.column_stack([x_m, y_m])).simplify(0.02 * width)
-        footprint = track.buffer(0.5 * width, quad_segs=4)
+        # Simplified by 5 % of the width (the footprint's edge moves by no more), then
+        # buffered in pieces and merged: one buffer of a long track that crosses itself
+        # hundreds of times takes a minute, the pieces' union a second.
+        track = shapely.LineString(np.column_stack([x_m, y_m])).simplify(0.05 * width)
+        coords = np.asarray(track.coords)
+        if len(coords) < 2:
+            coords = np.vstack([coords, coords])
+        pieces = [
+            shapely.LineString(coords[i : i + FOOTPRINT_PIECE + 1])
+            if len(coords[i : i + FOOTPRINT_PIECE + 1]) >= 2
+            else shapely.Point(coords[i])
+            for i in range(0, max(len(coords) - 1, 1), FOOTPRINT_PIECE)
+        ]
+        footprint = shapely.union_all(shapely.buffer(pieces, 0.5 * width, quad_segs=4))
     elif len(x_m) == 1:
         footprint = shapely.Point(float(x_m[0]), float(y_m[0])).buffer(0.5 * width, quad_segs=4)
     else:
