@@ -7,6 +7,7 @@
 
 import { formatDate, formatDuration, formatMetres, formatPercent } from "./format.js";
 import { t, tn } from "./i18n.js";
+import { drawMissed, missedText, receiverText } from "./missed.js";
 
 /** How often a live run is fetched again [ms]. */
 export const LIVE_POLL_MS = 3000;
@@ -77,9 +78,10 @@ function stretchesText(metrics) {
  * @param {(text: string) => void} options.setStatus
  * @param {(error: unknown) => void} options.showFailure
  * @param {() => void} options.clearError
+ * @param {(plan: object) => void} [options.onPlanCreated] a follow-up plan was stored
  * @returns {{planChanged: (planId: number | null) => void}}
  */
-export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus }) {
+export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus, onPlanCreated }) {
   const ui = {
     card: $("check"),
     gps: $("sim-gps"),
@@ -96,6 +98,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     runTitle: $("run-title"),
     runGpx: $("run-gpx"),
     runKml: $("run-kml"),
+    runReceiver: $("run-receiver"),
+    followUp: $("follow-up"),
     runs: $("runs-list"),
     runsEmpty: $("runs-empty"),
   };
@@ -172,6 +176,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
         )
         .addTo(group);
     }
+    const gaps = drawMissed(group, run);
     if (run.last_fix) {
       L.marker([run.last_fix.lat, run.last_fix.lon], {
         pmIgnore: true,
@@ -187,7 +192,11 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     fillFigures(ui.run, run.metrics, {
       fixes: String(run.fix_count),
       stretches: stretchesText(run.metrics),
+      missed: missedText(run),
     });
+    ui.runReceiver.textContent = receiverText(run);
+    ui.runReceiver.hidden = !ui.runReceiver.textContent;
+    ui.followUp.hidden = gaps === 0;
     ui.runGpx.href = api.runGpxUrl(run.id);
     ui.runGpx.hidden = run.fix_count === 0;
     ui.runKml.href = api.runKmlUrl(run.id);
@@ -291,6 +300,24 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     }
   }
 
+  async function planFollowUp() {
+    const id = state.runId;
+    if (id == null) return;
+    clearError();
+    ui.followUp.disabled = true;
+    setStatus("Planning the missed ground…");
+    try {
+      const plan = await api.followUp(id);
+      setStatus(`Follow-up plan saved: ${plan.stats.line_count} lines over the missed ground.`);
+      onPlanCreated?.(plan);
+    } catch (error) {
+      setStatus("");
+      showFailure(error);
+    } finally {
+      ui.followUp.disabled = false;
+    }
+  }
+
   async function simulate() {
     const planId = state.planId;
     if (planId == null) return;
@@ -344,6 +371,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
   }
 
   ui.simulate.addEventListener("click", simulate);
+  ui.followUp.addEventListener("click", planFollowUp);
   ui.upload.addEventListener("click", () => ui.file.click());
   ui.file.addEventListener("change", () => {
     const [file] = ui.file.files;
