@@ -169,3 +169,24 @@ def test_a_run_that_covered_everything_has_no_follow_up(
     response = client.post(f"/api/runs/{run['id']}/follow-up")
     assert response.status_code == 409
     assert "no missed ground" in response.json()["detail"]
+
+
+def test_gpx_points_keep_their_fix_hdop_and_satellites():
+    from app.tracks import parse_track
+
+    gpx = b"""<?xml version="1.0" encoding="UTF-8"?>
+<gpx version="1.1" creator="logger" xmlns="http://www.topografix.com/GPX/1/1">
+ <trk><trkseg>
+  <trkpt lat="-8.62652" lon="115.29797"><time>2026-11-22T03:14:15Z</time>
+   <fix>dgps</fix><sat>11</sat><hdop>0.9</hdop></trkpt>
+  <trkpt lat="-8.62651" lon="115.29798"><time>2026-11-22T03:14:16Z</time>
+   <fix>3d</fix><sat>7</sat><hdop>1.6</hdop></trkpt>
+  <trkpt lat="-8.62650" lon="115.29799"><time>2026-11-22T03:14:17Z</time></trkpt>
+ </trkseg></trk>
+</gpx>"""
+    fixes = parse_track(gpx).fixes
+    assert [(f.quality, f.hdop, f.satellites) for f in fixes] == [
+        ("dgps", 0.9, 11),
+        ("single", 1.6, 7),
+        (None, None, None),
+    ]

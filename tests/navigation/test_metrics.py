@@ -7,6 +7,8 @@ import math
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from navigation import NavigationError, score_track
 from navigation.metrics import _polygon_mask
@@ -224,3 +226,17 @@ def test_coverage_uses_the_implement_width(two_line_plan) -> None:  # type: igno
     assert m.coverage_ratio == pytest.approx(0.25, abs=0.02)
     full = score_track(dataclasses.replace(two_line_plan), np.arange(len(x)) * 0.1, lon, lat)
     assert full.coverage_ratio == pytest.approx(1.0, abs=0.01)
+
+
+@settings(max_examples=15, deadline=None)
+@given(offset=st.floats(min_value=0.0, max_value=3.6), side=st.sampled_from([-1.0, 1.0]))
+def test_a_track_offset_by_up_to_nearly_an_interval_is_measured_by_its_offset(
+    two_line_plan, offset: float, side: float
+) -> None:  # type: ignore[no-untyped-def]
+    # Both lines driven ``offset`` to one side (up to 0.9 of the 4 m interval, so past the
+    # neighbour's half): the error is the offset, not its distance to the nearest line.
+    wx, wy = local_waypoints(two_line_plan)
+    x, y = drive(wx + side * offset, wy, spacing=0.2)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    m = score_track(two_line_plan, np.arange(len(x)) * 0.1, lon, lat)
+    assert m.cross_track_max_m == pytest.approx(offset, abs=1e-3)
