@@ -37,6 +37,8 @@ _KIND_CODES = {"line": LINE, "turn": TURN, "transit": TRANSIT, "headland": HEADL
 #: at most this many (sample × piece) cells in the dynamic programme (memory and time).
 MAX_MATCH_SAMPLES = 6000
 MAX_MATCH_CELLS = 24_000_000
+#: Most pieces between two samples a fix is refined over.
+MAX_REFINE_SPAN = 64
 
 
 @dataclass(frozen=True, slots=True)
@@ -278,11 +280,27 @@ def match_monotone(route: Route, x_m: FloatArray, y_m: FloatArray) -> IntArray:
     weight = 2.0 * route.spacing_m
 
     path = _monotone_path(route, sx, sy, ux, uy, px, py, weight)
-    # Each fix takes the piece of the sample nearest in distance travelled.
-    nearest = np.clip(np.rint(s / spacing).astype(np.int64), 0, len(path) - 1)
     if total == 0:
-        nearest = np.zeros(n, dtype=np.int64)
-    return np.asarray(path[nearest], dtype=np.int64)
+        return np.full(n, path[0], dtype=np.int64)
+    # Each fix lies between two samples: it takes the nearest of the pieces between theirs
+    # (samples are up to a few metres apart on a long track, turns may be shorter).
+    step_s = grid[1] - grid[0] if len(grid) > 1 else 1.0
+    before = np.clip(np.floor(s / step_s).astype(np.int64), 0, len(path) - 1)
+    after = np.clip(before + 1, 0, len(path) - 1)
+    lo = path[before]
+    hi = path[after]
+    best_piece = lo.copy()
+    best_d, _ = point_segment(x_m, y_m, route.ax[lo], route.ay[lo], route.bx[lo], route.by[lo])
+    span = int(min((hi - lo).max(initial=0), MAX_REFINE_SPAN))
+    for offset in range(1, span + 1):
+        cand = np.minimum(lo + offset, hi)
+        d, _ = point_segment(
+            x_m, y_m, route.ax[cand], route.ay[cand], route.bx[cand], route.by[cand]
+        )
+        better = d < best_d
+        best_piece = np.where(better, cand, best_piece)
+        best_d = np.where(better, d, best_d)
+    return np.asarray(best_piece, dtype=np.int64)
 
 
 def _monotone_path(
