@@ -12,6 +12,7 @@ outside the footprint on the same raster into polygons (product.md §8).
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import contourpy
 import numpy as np
@@ -206,10 +207,12 @@ def missed_ground(
     generator = contourpy.contour_generator(
         xs, ys, z, fill_type=contourpy.FillType.OuterOffset, corner_mask=False
     )
-    points, offsets = generator.filled(0.5, 1.5)
+    filled = generator.filled(0.5, 1.5)  # OuterOffset: (points, offsets) per outer ring
+    points = cast("list[FloatArray]", filled[0])
+    offsets = cast("list[npt.NDArray[np.uint32]]", filled[1])
     polygons = []
     for pts, offs in zip(points, offsets, strict=True):
-        rings = [pts[a:b] for a, b in zip(offs[:-1], offs[1:], strict=True)]
+        rings = [pts[int(a) : int(b)] for a, b in zip(offs[:-1], offs[1:], strict=True)]
         polygon = shapely.Polygon(rings[0], rings[1:]).buffer(0)
         polygons.append(polygon)
     gaps = shapely.union_all(polygons).intersection(field)
