@@ -27,7 +27,7 @@ def chi2_mean_bounds(dof: int, n_samples: int, *, level: float = 0.95) -> tuple[
     --------
     >>> low, high = chi2_mean_bounds(2, 50)
     >>> round(low, 3), round(high, 3)
-    (1.479, 2.597)
+    (1.484, 2.591)
     """
     if dof < 1 or n_samples < 1:
         raise ValueError("dof and n_samples must be ≥ 1")

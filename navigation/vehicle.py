@@ -54,7 +54,8 @@ def turn_geometry(params: VehicleParams, speed_mps: float) -> tuple[float, float
     >>> rate, radius = turn_geometry(VehicleParams(track_width_m=0.7, turn_rate_dps=45.0), 0.56)
     >>> round(rate, 4), radius                    # π/4 rad/s about the braked wheel
     (0.7854, 0.35)
-    >>> turn_geometry(VehicleParams(min_turn_radius_m=3.0), 0.6)
+    >>> rate, radius = turn_geometry(VehicleParams(min_turn_radius_m=3.0), 0.6)
+    >>> round(rate, 6), radius                    # v / R on a 3 m arc
     (0.2, 3.0)
     """
     if params.min_turn_radius_m > 0.0:
