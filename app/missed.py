@@ -146,6 +146,8 @@ def plan_follow_up(plan: Plan, track: Any, *, run_id: int) -> Plan:
         }
     )
     return Plan(
+        organisation_id=plan.organisation_id,
+        field_id=plan.field_id,
         name=name,
         request=request,
         stats=joined.stats.as_dict(),

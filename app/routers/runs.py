@@ -7,7 +7,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, File, Form, Query, Response, UploadFile, status
 
 from app import runs, services
-from app.auth import FixPoster, Viewer, forbidden
+from app.auth import FixPoster, Planner, Viewer, forbidden
 from app.db import SessionDep
 from app.errors import UploadTooLargeError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan
@@ -135,13 +135,14 @@ def add_fixes(
     status_code=status.HTTP_201_CREATED,
     responses={**_NOT_FOUND, **_BAD_INPUT, **_CONFLICT},
 )
-def create_follow_up(run_id: int, session: SessionDep, response: Response) -> Plan:
+def create_follow_up(run_id: int, session: SessionDep, access: Planner, response: Response) -> Plan:
     """Plan a path over the ground the run missed and store it as a new plan (product.md §8).
 
     The gaps are those of `missed` in the run's answer; each is planned with the run's plan's
-    interval and options, nearest first from its start. 409 if the run missed nothing.
+    interval and options, nearest first from its start, and stored in the run's organisation
+    and field. 409 if the run missed nothing.
     """
-    plan = runs.follow_up_plan(session, runs.read_run(session, run_id))
+    plan = runs.follow_up_plan(session, runs.read_run(session, run_id, access))
     response.headers["Location"] = f"/api/plans/{plan.id}"
     return plan
 
