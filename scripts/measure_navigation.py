@@ -2,6 +2,7 @@
 
     .venv/bin/python scripts/measure_navigation.py [--seeds 50] [-o figures.json]
     .venv/bin/python scripts/measure_navigation.py --speed
+    .venv/bin/python scripts/measure_navigation.py --run-cost
 
 Seeded Monte Carlo over seeds 0 … N-1 (one process, no parallelism: the machine is shared),
 on the paper's field (``../shared/fields/paper_ketewel.geojson``) with its start and finish,
@@ -32,6 +33,7 @@ from planner.projection import field_frame
 from planner.types import CoveragePlan, PathSegment, Waypoint
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # for bench.bench_runs's track (``--run-cost``)
 PAPER_FIELD = ROOT.parent / "shared" / "fields" / "paper_ketewel.geojson"
 DATE = dt.date(2021, 2, 1)
 
@@ -196,15 +198,47 @@ def speed() -> dict[str, Any]:
     return out
 
 
+def run_cost() -> dict[str, float]:
+    """CPU time to score a 6-hour 10 Hz log and trace its missed ground (bench_runs' track)."""
+    from app.schemas import PlanCreate
+    from app.services import coverage_plan_from_row, plan_field
+    from bench.bench_runs import field_geojson, six_hour_track
+    from navigation.coverage import missed_ground
+    from navigation.route import match_monotone
+
+    row = plan_field(PlanCreate(field=field_geojson(), interval_m=1.0))
+    plan = coverage_plan_from_row(row)
+    fixes = six_hour_track(row)
+    lon = np.array([f.lon for f in fixes])
+    lat = np.array([f.lat for f in fixes])
+    frame = field_frame(plan.field_lonlat)
+    x, y = (np.asarray(v) for v in frame.to_local_xy(lon, lat))
+    out: dict[str, float] = {"fixes": float(len(fixes))}
+    c = time.process_time()
+    match_monotone(build_route(plan, frame), x, y)
+    out["match_cpu_s"] = round(time.process_time() - c, 3)
+    c = time.process_time()
+    score_track(plan, np.arange(len(x)) * 0.1, lon, lat)
+    out["score_cpu_s"] = round(time.process_time() - c, 3)
+    c = time.process_time()
+    missed_ground(frame, plan, x, y)
+    out["missed_ground_cpu_s"] = round(time.process_time() - c, 3)
+    return out
+
+
 def main() -> int:
     """Measure and print the figures."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=50)
     parser.add_argument("--speed", action="store_true", help="only time the simulator")
+    parser.add_argument("--run-cost", action="store_true", help="only time scoring a 6 h log")
     parser.add_argument("-o", "--output", type=Path)
     args = parser.parse_args()
     if args.speed:
         print(json.dumps(speed(), indent=1))
+        return 0
+    if args.run_cost:
+        print(json.dumps(run_cost(), indent=1))
         return 0
     seeds = range(args.seeds)
     started = time.process_time()
