@@ -20,6 +20,7 @@ import shapely
 from shapely import Polygon
 
 import planner
+from app import budget
 from app.errors import ConflictError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan
 from app.services import _waypoint_dict, coverage_plan_from_row, polygon_to_geojson
@@ -83,8 +84,12 @@ def _plan_kwargs(request: dict[str, Any]) -> dict[str, Any]:
     return {k: request[k] for k in names if k in request and k in accepted}
 
 
-def plan_follow_up(plan: Plan, track: Any, *, run_id: int) -> Plan:
+def plan_follow_up(plan: Plan, track: Any, *, run_id: int, budget_s: float) -> Plan:
     """Plan a path over the gaps a run left; return an unsaved :class:`Plan` row.
+
+    Each gap is planned within ``budget_s`` (:mod:`app.budget`, as any large field); a gap
+    the planner refuses or cannot plan in time is left out and listed in
+    ``request.follow_up.skipped_gaps`` with the reason.
 
     Raises
     ------
@@ -115,8 +120,9 @@ def plan_follow_up(plan: Plan, track: Any, *, run_id: int) -> Plan:
     for i, gap in enumerate(ordered):
         gap_lonlat = frame.to_lonlat(gap)
         try:
-            part = planner.plan_coverage(
+            part = budget.plan_coverage(
                 gap_lonlat,
+                budget_s=budget_s,
                 start_lonlat=position,
                 finish_lonlat=tuple(finish) if finish and i == len(ordered) - 1 else None,
                 **kwargs,

@@ -434,7 +434,7 @@ def run_view(
     return view
 
 
-def follow_up_plan(session: Session, run: Run) -> Plan:
+def follow_up_plan(session: Session, run: Run, *, budget_s: float) -> Plan:
     """Plan the ground ``run`` missed (:func:`app.missed.plan_follow_up`), store it, commit.
 
     Raises
@@ -448,7 +448,7 @@ def follow_up_plan(session: Session, run: Run) -> Plan:
     track = load_track(session, run.id)
     if len(track.t) == 0:
         raise ConflictError(f"run {run.id}: has no fix yet; there is no missed ground to plan")
-    follow_up = plan_follow_up(plan, track, run_id=run.id)
+    follow_up = plan_follow_up(plan, track, run_id=run.id, budget_s=budget_s)
     _end_read_transaction(session)
     try:
         session.add(follow_up)

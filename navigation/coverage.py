@@ -215,7 +215,9 @@ def missed_ground(
         rings = [pts[int(a) : int(b)] for a, b in zip(offs[:-1], offs[1:], strict=True)]
         polygon = shapely.Polygon(rings[0], rings[1:]).buffer(0)
         polygons.append(polygon)
-    gaps = shapely.union_all(polygons).intersection(field)
+    # Within a cell of the raster's edge: the traced staircase becomes straight edges, so a
+    # gap has the few vertices a planner wants, not one per cell.
+    gaps = shapely.union_all(polygons).simplify(cell).intersection(field)
     parts = [
         g
         for g in getattr(gaps, "geoms", [gaps])

@@ -135,14 +135,21 @@ def add_fixes(
     status_code=status.HTTP_201_CREATED,
     responses={**_NOT_FOUND, **_BAD_INPUT, **_CONFLICT},
 )
-def create_follow_up(run_id: int, session: SessionDep, access: Planner, response: Response) -> Plan:
+def create_follow_up(
+    run_id: int,
+    session: SessionDep,
+    access: Planner,
+    settings: SettingsDep,
+    response: Response,
+) -> Plan:
     """Plan a path over the ground the run missed and store it as a new plan (product.md §8).
 
     The gaps are those of `missed` in the run's answer; each is planned with the run's plan's
     interval and options, nearest first from its start, and stored in the run's organisation
     and field. 409 if the run missed nothing.
     """
-    plan = runs.follow_up_plan(session, runs.read_run(session, run_id, access))
+    run = runs.read_run(session, run_id, access)
+    plan = runs.follow_up_plan(session, run, budget_s=settings.planning_budget_s)
     response.headers["Location"] = f"/api/plans/{plan.id}"
     return plan
 
