@@ -305,10 +305,10 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     if (id == null) return;
     clearError();
     ui.followUp.disabled = true;
-    setStatus("Planning the missed ground…");
+    setStatus(t("Planning the missed ground…"));
     try {
       const plan = await api.followUp(id);
-      setStatus(`Follow-up plan saved: ${plan.stats.line_count} lines over the missed ground.`);
+      setStatus(t("Follow-up plan saved: {count} lines over the missed ground.", { count: plan.stats.line_count }));
       onPlanCreated?.(plan);
     } catch (error) {
       setStatus("");
