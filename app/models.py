@@ -21,6 +21,7 @@ from sqlalchemy import (
     Double,
     ForeignKey,
     Integer,
+    SmallInteger,
     String,
     Text,
 )
@@ -203,6 +204,13 @@ class Fix(Base):
         Course over ground or compass heading, clockwise from true north [deg].
     speed_mps : float or None
         Speed over ground [m/s].
+    quality : str or None
+        Fix quality where the log says it (``rtk_fixed``, ``rtk_float``, ``dgps``, ``single``,
+        ``dead_reckoning``; :data:`app.tracks.FIX_QUALITIES`).
+    hdop : float or None
+        Horizontal dilution of precision.
+    satellites : int or None
+        Satellites used in the fix.
     """
 
     __tablename__ = "fixes"
@@ -213,6 +221,9 @@ class Fix(Base):
     lon: Mapped[float] = mapped_column(Double)
     heading_deg: Mapped[float | None] = mapped_column(Double)
     speed_mps: Mapped[float | None] = mapped_column(Double)
+    quality: Mapped[str | None] = mapped_column(String(16))
+    hdop: Mapped[float | None] = mapped_column(Double)
+    satellites: Mapped[int | None] = mapped_column(SmallInteger)
 
 
 class Field(Base):

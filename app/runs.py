@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Final
 
 import numpy as np
@@ -23,7 +23,9 @@ from sqlalchemy.orm import Session
 
 from app.auth import Access, owned
 from app.errors import ConflictError, NotFoundError
+from app.missed import missed_ground_geojson, plan_follow_up
 from app.models import Fix, Plan, Run
+from app.receiver import receiver_report
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
 from app.services import (
     EXPORT_TYPES,
@@ -47,8 +49,8 @@ from planner.export.kml import plan_to_kml
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Rows per bulk ``INSERT`` statement (6 parameters each: under SQLite's 32,766 limit).
-INSERT_CHUNK_ROWS: Final = 5000
+#: Rows per bulk ``INSERT`` statement (9 parameters each: under SQLite's 32,766 limit).
+INSERT_CHUNK_ROWS: Final = 3000
 #: Most vertices of the track returned for display.
 MAX_TRACK_POINTS: Final = 20_000
 #: Default cross-track error threshold of the reported stretches [m].
@@ -67,6 +69,10 @@ class RunTrack:
         WGS84 [deg].
     heading_deg, speed_mps : float arrays
         NaN where unknown.
+    quality : list of (str or None)
+        Fix quality per fix (:data:`app.tracks.FIX_QUALITIES`), None where unknown.
+    hdop, satellites : float arrays
+        NaN where unknown.
     """
 
     t: npt.NDArray[np.int64]
@@ -74,6 +80,9 @@ class RunTrack:
     lat: FloatArray
     heading_deg: FloatArray
     speed_mps: FloatArray
+    quality: list[str | None] = field(default_factory=list)
+    hdop: FloatArray = field(default_factory=lambda: np.array([], dtype=float))
+    satellites: FloatArray = field(default_factory=lambda: np.array([], dtype=float))
 
     def time_s(self) -> FloatArray:
         """Seconds since the first fix."""
@@ -101,6 +110,9 @@ def _rows(run_id: int, fixes: Sequence[TrackFix]) -> list[dict[str, Any]]:
             "lon": f.lon,
             "heading_deg": f.heading_deg,
             "speed_mps": f.speed_mps,
+            "quality": f.quality,
+            "hdop": f.hdop,
+            "satellites": f.satellites,
         }
         for f in fixes
     ]
@@ -220,6 +232,9 @@ def add_fixes(session: Session, run: Run, fixes_in: Sequence[FixIn]) -> tuple[in
             lon=f.lon,
             heading_deg=f.heading_deg,
             speed_mps=f.speed_mps,
+            quality=f.quality,
+            hdop=f.hdop,
+            satellites=f.satellites,
         )
         for i, f in enumerate(fixes_in)
     ]
@@ -278,7 +293,7 @@ def load_track(session: Session, run_id: int) -> RunTrack:
     try:
         # ``run_id`` is an int: formatting it in is safe, and spares the two paramstyles.
         cursor.execute(
-            "SELECT t, lon, lat, heading_deg, speed_mps FROM fixes "
+            "SELECT t, lon, lat, heading_deg, speed_mps, hdop, satellites, quality FROM fixes "
             f"WHERE run_id = {int(run_id)} ORDER BY t"
         )
         rows = cursor.fetchall()
@@ -287,18 +302,27 @@ def load_track(session: Session, run_id: int) -> RunTrack:
     if not rows:
         empty = np.array([], dtype=float)
         return RunTrack(np.array([], dtype=np.int64), empty, empty, empty, empty)
-    table = np.array(rows, dtype=np.float64)  # None -> nan
+    table = np.array([row[:7] for row in rows], dtype=np.float64)  # None -> nan
     return RunTrack(
         t=table[:, 0].astype(np.int64),
         lon=table[:, 1],
         lat=table[:, 2],
         heading_deg=table[:, 3],
         speed_mps=table[:, 4],
+        quality=[row[7] for row in rows],
+        hdop=table[:, 5],
+        satellites=table[:, 6],
     )
 
 
-def score_run(plan: Plan, track: RunTrack, *, threshold_m: float) -> TrackMetrics | None:
-    """Score a run's track against its plan with :func:`navigation.score_track` (None if empty)."""
+def score_run(
+    plan: Plan, track: RunTrack, *, threshold_m: float, live: bool = False
+) -> TrackMetrics | None:
+    """Score a run's track against its plan with :func:`navigation.score_track` (None if empty).
+
+    A live run is scored on the part of the plan driven so far: waypoints not yet reached get
+    no error.
+    """
     if len(track.t) == 0:
         return None
     return score_track(
@@ -307,6 +331,7 @@ def score_run(plan: Plan, track: RunTrack, *, threshold_m: float) -> TrackMetric
         track.lon,
         track.lat,
         threshold_m=threshold_m,
+        live=live,
     )
 
 
@@ -349,7 +374,7 @@ def run_view(
     if plan is None:  # deleted meanwhile: the run went with it
         raise NotFoundError("run", run.id)
     track = load_track(session, run.id)
-    metrics = score_run(plan, track, threshold_m=threshold_m)
+    metrics = score_run(plan, track, threshold_m=threshold_m, live=run.source == "live")
     n = len(track.t)
     view: dict[str, Any] = {
         "id": run.id,
@@ -364,9 +389,12 @@ def run_view(
         "metrics": json_ready(metrics.as_dict()) if metrics else None,
         "track": None,
         "stretches": {"type": "FeatureCollection", "features": []},
+        "receiver": json_ready(receiver_report(track.quality, track.hdop, track.satellites)),
+        "missed": {"type": "FeatureCollection", "features": []},
     }
     if not n:
         return view
+    view["missed"] = json_ready(missed_ground_geojson(plan, track))
     view["last_fix"] = {
         "t": us_to_datetime(int(track.t[-1])),
         "lat": float(track.lat[-1]),
@@ -404,6 +432,31 @@ def run_view(
         )
     view["stretches"]["features"] = features
     return view
+
+
+def follow_up_plan(session: Session, run: Run, *, budget_s: float) -> Plan:
+    """Plan the ground ``run`` missed (:func:`app.missed.plan_follow_up`), store it, commit.
+
+    Raises
+    ------
+    ConflictError
+        If the run has no fix yet, or missed nothing that can be planned.
+    """
+    plan = session.get(Plan, run.plan_id)
+    if plan is None:
+        raise NotFoundError("run", run.id)
+    track = load_track(session, run.id)
+    if len(track.t) == 0:
+        raise ConflictError(f"run {run.id}: has no fix yet; there is no missed ground to plan")
+    follow_up = plan_follow_up(plan, track, run_id=run.id, budget_s=budget_s)
+    _end_read_transaction(session)
+    try:
+        session.add(follow_up)
+        session.commit()
+    except BaseException:
+        session.rollback()
+        raise
+    return follow_up
 
 
 def _stretch_dict(stretch: Any) -> dict[str, Any]:

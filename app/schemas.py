@@ -239,14 +239,35 @@ class MetricsRead(BaseModel):
     cross_track_max_m: float | None
     cross_track_rms_m: float | None
     cross_track_p95_m: float | None
-    waypoint_error_max_m: float
-    waypoint_error_mean_m: float
-    waypoint_errors_m: list[float]
+    turn_cross_track_max_m: float | None = None
+    turn_cross_track_rms_m: float | None = None
+    waypoint_error_max_m: float | None
+    waypoint_error_mean_m: float | None
+    line_waypoint_error_max_m: float | None = None
+    waypoint_errors_m: list[float | None]
+    waypoints_reached: int | None = None
+    plan_progress: float | None = None
     coverage_ratio: float
+    coverage_of_driven_ratio: float | None = None
+    implement_width_m: float | None = None
     threshold_m: float
     stretches: list[StretchRead]
     filter_rms_m: float | None = None
     gps_rms_m: float | None = None
+    waypoint_error_estimate_max_m: float | None = None
+    waypoint_error_estimate_mean_m: float | None = None
+    line_waypoint_error_estimate_max_m: float | None = None
+    waypoint_errors_estimate_m: list[float | None] | None = None
+    nees_mean: float | None = None
+    nees_dof: int | None = None
+    nees_bounds_95: list[float] | None = None
+    nees_within_bounds: bool | None = None
+    nis_mean: float | None = None
+    nis_dof: int | None = None
+    nis_bounds_95: list[float] | None = None
+    nis_within_bounds: bool | None = None
+    compass_bias_estimate_deg: float | None = None
+    compass_bias_true_deg: float | None = None
 
 
 class SimulationRead(BaseModel):
@@ -311,6 +332,11 @@ class FixIn(BaseModel):
     lon: float = Field(ge=-180, le=180, description="Longitude, WGS84 [deg].")
     heading_deg: float | None = Field(default=None, description="Heading from true north [deg].")
     speed_mps: float | None = Field(default=None, description="Speed over ground [m/s].")
+    quality: Literal["rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning"] | None = Field(
+        default=None, description="Fix quality, as the receiver reported it."
+    )
+    hdop: float | None = Field(default=None, ge=0, description="Horizontal dilution of precision.")
+    satellites: int | None = Field(default=None, ge=0, le=255, description="Satellites used.")
 
 
 class FixesAdded(BaseModel):
@@ -367,4 +393,16 @@ class RunRead(RunSummary):
     )
     stretches: dict[str, Any] = Field(
         description="GeoJSON FeatureCollection: a LineString per stretch over the threshold."
+    )
+    receiver: dict[str, Any] = Field(
+        default_factory=dict,
+        description="How good the fixes were: `shares` of each fix quality (rtk_fixed, "
+        "rtk_float, dgps, single, dead_reckoning, unknown), `hdop_median`, "
+        "`satellites_median`, `accuracy` (centimetre, decimetre, metre, unknown), "
+        "`metre_level` and a `note` saying what the figures are worth.",
+    )
+    missed: dict[str, Any] = Field(
+        default_factory=dict,
+        description="GeoJSON FeatureCollection: a Polygon per piece of the field the run's "
+        "implement footprint did not cover (`kind: missed`, `area_m2`).",
     )

@@ -313,6 +313,7 @@ def simulate_plan(
             "gps": body.gps,
             "guidance": body.guidance,
             "date": date.isoformat(),
+            "vehicle": log.config.vehicle.preset if log.config.vehicle else None,
         },
         metrics=json_ready(log.metrics.as_dict()),
         tracks=json_ready(simulation_to_geojson(log)),

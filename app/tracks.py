@@ -85,6 +85,8 @@ _GGA_QUALITIES: Final = {
     5: "rtk_float",
     6: "dead_reckoning",
 }
+#: GPX 1.1 ``<fix>`` values (none, 2d, 3d, dgps, pps) mapped where they say something.
+GPX_FIXES: Final[dict[str, str]] = {"2d": "single", "3d": "single", "dgps": "dgps"}
 
 
 class TrackFormatError(ValueError):
@@ -403,6 +405,9 @@ def _read_gpx(data: bytes) -> tuple[list[TrackFix], dict[str, Any]]:
                         lon=lon,
                         heading_deg=_finite_or_none(point.course),
                         speed_mps=_finite_or_none(point.speed),
+                        quality=GPX_FIXES.get(str(point.type_of_gpx_fix or "").lower()),
+                        hdop=_finite_or_none(_float_or_none(point.horizontal_dilution)),
+                        satellites=_int_or_none(point.satellites),
                     )
                 )
         if fixes:
@@ -412,6 +417,18 @@ def _read_gpx(data: bytes) -> tuple[list[TrackFix], dict[str, Any]]:
                 "untimed_points": untimed,
             }
     return [], {"tracks": len(gpx.tracks), "untimed_points": untimed}
+
+
+def _float_or_none(value: object) -> float | None:
+    try:
+        return None if value in (None, "") else float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return None
+
+
+def _int_or_none(value: object) -> int | None:
+    number = _float_or_none(value)
+    return int(number) if number is not None and number >= 0 else None
 
 
 def _finite_or_none(value: float | None) -> float | None:

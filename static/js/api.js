@@ -157,4 +157,9 @@ export class ChecksApi {
   runKmlUrl(id) {
     return `${this.apiUrl}/runs/${encodeURIComponent(id)}/export/kml`;
   }
+
+  /** Plan a path over the ground run `id` missed; the answer is the stored plan. */
+  followUp(id) {
+    return requestJson(`${this.apiUrl}/runs/${encodeURIComponent(id)}/follow-up`, { method: "POST" });
+  }
 }

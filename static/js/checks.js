@@ -9,6 +9,7 @@ import { formatDate, formatDuration, formatMetres, formatPercent } from "./forma
 import { t, tn } from "./i18n.js";
 import { ApiError } from "./api.js";
 import { JobCancelled, JobFailed, followJob, jobProgress } from "./jobs.js";
+import { drawMissed, missedText, receiverText } from "./missed.js";
 
 /** How often a live run is fetched again [ms]. */
 export const LIVE_POLL_MS = 3000;
@@ -93,9 +94,10 @@ function stretchesText(metrics) {
  * @param {(text: string) => void} options.setStatus
  * @param {(error: unknown) => void} options.showFailure
  * @param {() => void} options.clearError
+ * @param {(plan: object) => void} [options.onPlanCreated] a follow-up plan was stored
  * @returns {{planChanged: (planId: number | null) => void}}
  */
-export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus }) {
+export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus, onPlanCreated }) {
   const ui = {
     card: $("check"),
     gps: $("sim-gps"),
@@ -114,6 +116,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     runTitle: $("run-title"),
     runGpx: $("run-gpx"),
     runKml: $("run-kml"),
+    runReceiver: $("run-receiver"),
+    followUp: $("follow-up"),
     runs: $("runs-list"),
     runsEmpty: $("runs-empty"),
   };
@@ -200,6 +204,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
         )
         .addTo(group);
     }
+    const gaps = drawMissed(group, run);
     if (run.last_fix) {
       L.marker([run.last_fix.lat, run.last_fix.lon], {
         pmIgnore: true,
@@ -215,7 +220,11 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     fillFigures(ui.run, run.metrics, {
       fixes: String(run.fix_count),
       stretches: stretchesText(run.metrics),
+      missed: missedText(run),
     });
+    ui.runReceiver.textContent = receiverText(run);
+    ui.runReceiver.hidden = !ui.runReceiver.textContent;
+    ui.followUp.hidden = gaps === 0;
     ui.runGpx.href = api.runGpxUrl(run.id);
     ui.runGpx.hidden = run.fix_count === 0;
     ui.runKml.href = api.runKmlUrl(run.id);
@@ -319,6 +328,24 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     }
   }
 
+  async function planFollowUp() {
+    const id = state.runId;
+    if (id == null) return;
+    clearError();
+    ui.followUp.disabled = true;
+    setStatus(t("Planning the missed ground…"));
+    try {
+      const plan = await api.followUp(id);
+      setStatus(t("Follow-up plan saved: {count} lines over the missed ground.", { count: plan.stats.line_count }));
+      onPlanCreated?.(plan);
+    } catch (error) {
+      setStatus("");
+      showFailure(error);
+    } finally {
+      ui.followUp.disabled = false;
+    }
+  }
+
   async function simulate() {
     const planId = state.planId;
     if (planId == null) return;
@@ -396,6 +423,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
   }
 
   ui.simulate.addEventListener("click", simulate);
+  ui.followUp.addEventListener("click", planFollowUp);
   ui.upload.addEventListener("click", () => ui.file.click());
   ui.file.addEventListener("change", () => {
     const [file] = ui.file.files;

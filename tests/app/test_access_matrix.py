@@ -281,6 +281,12 @@ RULES: dict[tuple[str, str], Rule] = {
     ("POST", "/api/runs/{run_id}/fixes"): Rule(
         "fixes", lambda o: ("POST", f"/api/runs/{o.run_id}/fixes", {"json": FIX_BATCH}), item=True
     ),
+    ("POST", "/api/runs/{run_id}/follow-up"): Rule(
+        "planner",
+        lambda o: ("POST", f"/api/runs/{o.run_id}/follow-up", {}),
+        ok=201,  # two fixes leave most of the field to plan
+        item=True,
+    ),
     ("GET", "/api/runs/{run_id}/export/gpx"): Rule(
         "viewer", get("/api/runs/{o.run_id}/export/gpx"), item=True
     ),

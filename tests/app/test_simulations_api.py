@@ -138,6 +138,7 @@ def test_create_simulation_without_body_uses_defaults(
         "gps": "m8n",
         "guidance": "waypoint",
         "date": None,
+        "vehicle": "hand_tractor",  # the plan's vehicle (the default, as it names none)
     }
 
 
