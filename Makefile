@@ -32,7 +32,7 @@ node_modules/.installed: package.json package-lock.json
 # uv resolves for every platform (--universal), for the oldest Python we support.
 UV_COMPILE = $(BIN)/uv pip compile pyproject.toml --universal --python-version 3.11 \
 	--custom-compile-command "make lock" --quiet
-lock: $(BIN)/.installed
+lock: $(BIN)/.installed-dev
 	$(UV_COMPILE) -o requirements.lock
 	$(UV_COMPILE) --extra dev -o requirements-dev.lock
 
