@@ -148,7 +148,8 @@ def test_gps_without_https_says_https_is_needed(page: Page) -> None:
 def test_an_invalid_interval_clears_the_previous_path(page: Page) -> None:
     import_paper_field(page)
     generate(page)
-    expect(figure(page, "Lines")).to_have_text("4")
+    # A plan is on screen first (whatever its line count: R5 may add a line), then it goes.
+    expect(figure(page, "Lines")).to_have_text(re.compile(r"^[1-9][0-9]*$"))
     page.get_by_label("Interval (m)").fill("four")
     button(page, "Generate path").click()
     alert = page.get_by_role("alert")
