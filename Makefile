@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test bench install lint typecheck clean screenshot
+.PHONY: run test bench soak install lint typecheck clean screenshot
 
 # Python environment, rebuilt when the declared dependencies change.
 $(BIN)/.installed: pyproject.toml
@@ -35,6 +35,13 @@ test: install
 bench: install
 	command -v wrk >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -qq wrk; }
 	$(BIN)/python -m bench.run
+
+# The soak and fault suite for longer (make test runs it for a few seconds a test): a mixed
+# load on a real server on SQLite and PostgreSQL (TILLPATH_TEST_DATABASE_URL), killed and
+# restarted, and schemathesis with every phase. SOAK_S: seconds of load per test.
+SOAK_S ?= 120
+soak: install
+	TILLPATH_SOAK_S=$(SOAK_S) $(BIN)/python -m pytest -m soak -p no:cacheprovider -s tests/soak
 
 lint: install
 	$(BIN)/ruff check .

@@ -216,6 +216,10 @@ def _point_segment(
     return np.hypot(px - (ax + tc * dx), py - (ay + tc * dy)), t
 
 
+#: Fixes whose nearest tillage line is looked for at once (bounds the memory of a long log).
+_XTE_BLOCK = 50_000
+
+
 def cross_track_errors(
     pieces: PlanPieces, x_m: FloatArray, y_m: FloatArray
 ) -> tuple[FloatArray, IntArray]:
@@ -241,21 +245,29 @@ def cross_track_errors(
     sx = pieces.ax[owner] + frac * (pieces.bx - pieces.ax)[owner]
     sy = pieces.ay[owner] + frac * (pieces.by - pieces.ay)[owner]
     k = int(min(6, owner.size))
-    _, idx = cKDTree(np.column_stack([sx, sy])).query(np.column_stack([x_m, y_m]), k=k, workers=-1)
-    cand = owner[idx.reshape(len(x_m), k)]
-    dist, t = _point_segment(
-        x_m[:, None],
-        y_m[:, None],
-        pieces.ax[cand],
-        pieces.ay[cand],
-        pieces.bx[cand],
-        pieces.by[cand],
-    )
-    best = np.argmin(dist, axis=1)
-    rows = np.arange(len(x_m))
-    piece = cand[rows, best]
-    d = dist[rows, best]
-    tb = t[rows, best]
+    tree = cKDTree(np.column_stack([sx, sy]))
+    piece = np.empty(len(x_m), dtype=np.int64)
+    d = np.empty(len(x_m))
+    tb = np.empty(len(x_m))
+    # In blocks of fixes, so that the candidates' arrays (k per fix) stay small for a long log.
+    for lo in range(0, len(x_m), _XTE_BLOCK):
+        hi = min(lo + _XTE_BLOCK, len(x_m))
+        bx, by = x_m[lo:hi], y_m[lo:hi]
+        _, idx = tree.query(np.column_stack([bx, by]), k=k, workers=-1)
+        cand = owner[idx.reshape(hi - lo, k)]
+        dist, t = _point_segment(
+            bx[:, None],
+            by[:, None],
+            pieces.ax[cand],
+            pieces.ay[cand],
+            pieces.bx[cand],
+            pieces.by[cand],
+        )
+        best = np.argmin(dist, axis=1)
+        rows = np.arange(hi - lo)
+        piece[lo:hi] = cand[rows, best]
+        d[lo:hi] = dist[rows, best]
+        tb[lo:hi] = t[rows, best]
     # Inside the line by more than a millimetre: a fix abeam a line's end is turning.
     margin = 1e-3 / np.maximum(lengths[piece], 1e-9)
     on_line = pieces.is_line[piece] & (tb > margin) & (tb < 1.0 - margin)

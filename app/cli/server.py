@@ -72,6 +72,9 @@ def register(cli: typer.Typer) -> None:
         """Migrate the database, then serve the map page and the API (uvicorn)."""
         import uvicorn
 
+        from app.serving import uvicorn_options
+        from app.settings import get_settings
+
         shown = upgrade()
         typer.echo(f"database {shown} is up to date; serving on http://{host}:{port}", err=True)
         if _needs_first_account():
@@ -88,4 +91,5 @@ def register(cli: typer.Typer) -> None:
             workers=workers,
             access_log=access_log,
             proxy_headers=True,
+            **uvicorn_options(get_settings()),
         )

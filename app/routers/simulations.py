@@ -8,8 +8,9 @@ from fastapi import APIRouter, Response, status
 
 from app import services
 from app.auth import Planner, Viewer
-from app.db import SessionDep
-from app.models import Simulation
+from app.capacity import HeavyWorkDep
+from app.db import SessionDep, add_row, end_reads
+from app.models import Plan, Simulation
 from app.schemas import ErrorRead, SimulationCreate, SimulationRead
 
 router = APIRouter(tags=["simulations"])
@@ -20,19 +21,23 @@ _BAD_INPUT: dict[int | str, dict[str, Any]] = {
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorRead, "description": "No such plan or simulation"}
 }
+_BUSY: dict[int | str, dict[str, Any]] = {
+    503: {"model": ErrorRead, "description": "Server busy: retry after `Retry-After` seconds"}
+}
 
 
 @router.post(
     "/plans/{plan_id}/simulations",
     response_model=SimulationRead,
     status_code=status.HTTP_201_CREATED,
-    responses={**_BAD_INPUT, **_NOT_FOUND},
+    responses={**_BAD_INPUT, **_NOT_FOUND, **_BUSY},
 )
 def create_simulation(
     plan_id: int,
     session: SessionDep,
     access: Planner,
     response: Response,
+    heavy: HeavyWorkDep,
     body: SimulationCreate | None = None,
 ) -> Simulation:
     """Simulate the tractor driving a stored plan; store and return the run.
@@ -40,9 +45,10 @@ def create_simulation(
     The body is optional (defaults: seed 0, `m8n`, `waypoint`).
     """
     plan = services.read_plan(session, plan_id, access)
-    simulation = services.simulate_plan(plan, body or SimulationCreate())
-    session.add(simulation)
-    session.commit()
+    end_reads(session)  # no connection held while simulating
+    with heavy.slot("simulation"):
+        simulated = services.simulate_plan(plan, body or SimulationCreate())
+    simulation = add_row(session, simulated, parent=(Plan, plan.id, "plan"))
     response.headers["Location"] = f"/api/simulations/{simulation.id}"
     return simulation
 
