@@ -28,7 +28,7 @@ import numpy as np
 import shapely
 from sqlalchemy.orm import Session
 
-from app import ingest, runs
+from app import accounts, ingest, runs
 from app.db import make_engine, upgrade_database, write
 from app.models import Plan, Run
 from app.schemas import PlanCreate
@@ -87,6 +87,7 @@ def measure(url: str) -> dict[str, Any]:
     try:
         with Session(engine, expire_on_commit=False) as session:
             plan = plan_field(PlanCreate(name="bench", field=field_geojson(), interval_m=1.0))
+            plan.organisation_id = accounts.get_or_create_organisation(session, "bench").id
             session.add(plan)
             session.commit()
             fixes = six_hour_track(plan)
