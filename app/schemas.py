@@ -16,22 +16,34 @@ from app.models import PLAN_NAME_MAX_LENGTH
 from app.tracks import MAX_HEADING_DEG, MAX_SPEED_MPS, MAX_TIME_TEXT, check_text
 
 
-def _no_nul(value: str | None) -> str | None:
+def _no_control(value: str | None) -> str | None:
     if value is not None:
         check_text(value)
     return value
 
 
 #: A name as stored: no NUL or other control characters (PostgreSQL cannot store NUL).
-NameText = Annotated[str | None, AfterValidator(_no_nul)]
+NameText = Annotated[str | None, AfterValidator(_no_control)]
 
 Objective = Literal["shortest_path", "fewest_lines"]
+Pattern = Literal["boustrophedon", "snake", "spiral"]
 ExportFormat = Literal["gpx", "geojson", "csv", "json", "kml", "waypoints", "plan", "gpkg"]
 
 #: Largest page of ``GET /api/plans``.
 MAX_PAGE_SIZE = 200
 
 Position = tuple[float, float]
+
+
+def _no_nul(value: str) -> str:
+    """Refuse NUL characters: PostgreSQL text cannot hold them (it would be a 500)."""
+    if "\x00" in value:
+        raise ValueError("must not contain NUL characters")
+    return value
+
+
+#: Text a person typed that is stored: any characters but NUL.
+StoredText = Annotated[str, AfterValidator(_no_nul)]
 
 
 class PlanCreate(BaseModel):
@@ -96,6 +108,11 @@ class PlanCreate(BaseModel):
     objective: Objective = "shortest_path"
     headland_passes: int = Field(default=0, description="Passes around the boundary, 0–5.")
     speed_mps: float = Field(default=0.56, description="Working speed [m/s], 0.05–10.")
+    pattern: Pattern = Field(
+        default="boustrophedon",
+        description="boustrophedon (lines back and forth) or spiral (rounds inward, the core "
+        "back and forth); snake is not available yet.",
+    )
 
 
 class PlanStatsRead(BaseModel):
@@ -114,6 +131,9 @@ class PlanStatsRead(BaseModel):
     angle_deg: float
     estimated_time_s: float
     planning_ms: float
+    coverage_given_up_pp: float = Field(
+        0.0, description="How far below the best heading's coverage the plan is, in points"
+    )
 
 
 class WaypointRead(BaseModel):
@@ -245,6 +265,25 @@ class SimulationRead(BaseModel):
         description="GeoJSON FeatureCollection: LineStrings `source` true, estimated, gps, "
         "with `time_s` per vertex."
     )
+
+
+class SimulationSummary(BaseModel):
+    """A simulation in a plan's list: its configuration and metrics, no tracks."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    plan_id: int
+    created_at: dt.datetime
+    config: dict[str, Any]
+    metrics: MetricsRead
+
+
+class SimulationList(BaseModel):
+    """A plan's simulations, newest first."""
+
+    items: list[SimulationSummary]
+    total: int
 
 
 # --- Field runs (product.md §8) ----------------------------------------------------------

@@ -150,6 +150,9 @@ class ServerProcess:
         More ``tillpath serve`` options, e.g. ``("--workers", "2")``.
     env : mapping, optional
         More environment variables (``TILLPATH_*`` settings).
+    first_account : bool
+        Give the database its first account on the first start; without it the server asks
+        for one (``base_url.account`` then names an account that does not exist).
     """
 
     def __init__(
@@ -159,8 +162,10 @@ class ServerProcess:
         log: Path | None = None,
         serve_args: Sequence[str] = (),
         env: Mapping[str, str] | None = None,
+        first_account: bool = True,
     ) -> None:
         self.database_url = database_url
+        self.first_account = first_account
         self.log = log
         self.serve_args = tuple(serve_args)
         self.env = dict(env or {})
@@ -192,7 +197,11 @@ class ServerProcess:
             If it exits or does not answer ``/api/health`` within ``timeout_s``.
         """
         if self.account is None:
-            self.account = seed_account(self.database_url)
+            self.account = (
+                seed_account(self.database_url)
+                if self.first_account
+                else Account(TEST_USERNAME, TEST_PASSWORD, 0, "tp_no-account-yet")
+            )
         env = {
             **os.environ,
             "TILLPATH_DATABASE_URL": self.database_url,
@@ -237,6 +246,8 @@ def running_server(
     log: Path | None = None,
     serve_args: Sequence[str] = (),
     timeout_s: float = 60.0,
+    first_account: bool = True,
+    env: Mapping[str, str] | None = None,
 ) -> Iterator[ServerUrl]:
     """Serve the app with ``tillpath serve`` until the block ends; yield its base URL.
 
@@ -253,6 +264,11 @@ def running_server(
         More ``tillpath serve`` options, e.g. ``("--workers", "1")``.
     timeout_s : float
         How long to wait for ``/api/health`` [s].
+    first_account : bool
+        Give the database its first account before the server starts; without it the
+        server asks for one (``url.account`` then names an account that does not exist).
+    env : mapping, optional
+        More environment variables of the server (``TILLPATH_*`` settings).
 
     Raises
     ------
@@ -261,7 +277,9 @@ def running_server(
     """
     if log is not None:
         log.write_bytes(b"")
-    server = ServerProcess(database_url, log=log, serve_args=serve_args)
+    server = ServerProcess(
+        database_url, log=log, serve_args=serve_args, env=env, first_account=first_account
+    )
     try:
         yield server.start(timeout_s=timeout_s)
     finally:

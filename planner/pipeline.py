@@ -15,14 +15,18 @@ import shapely
 from shapely import Polygon
 
 from planner import angles, general, validation
-from planner.coverage import convex_chains, covered_area
+from planner.coverage import cell_area, convex_chains, covered_area
+from planner.errors import InvalidParameterError
+from planner.heading_coverage import convex_coverage
 from planner.lines import from_sweep, line_positions, to_sweep
-from planner.ordering import ordered_line_ends, score_headings
+from planner.ordering import VariantLengths, ordered_line_ends, score_headings
 from planner.projection import LocalFrame, field_frame
+from planner.spiral import order_spiral
 from planner.turns import pivot_time_s
 from planner.types import (
     DEFAULT_SPEED_MPS,
     DEFAULT_TRACK_WIDTH_M,
+    PATTERNS,
     CoveragePlan,
     Objective,
     PathSegment,
@@ -33,6 +37,7 @@ from planner.types import (
 )
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 #: Waypoints are rounded to 1e-9° (0.1 mm), so every export carries the same numbers.
 LONLAT_DECIMALS = 9
@@ -49,6 +54,7 @@ def plan_coverage(
     headland_passes: int = 0,
     speed_mps: float = DEFAULT_SPEED_MPS,
     track_width_m: float = DEFAULT_TRACK_WIDTH_M,
+    pattern: str = "boustrophedon",
 ) -> CoveragePlan:
     """Plan the back-and-forth tillage path over a field.
 
@@ -70,6 +76,9 @@ def plan_coverage(
         Working speed [m/s], for the time estimate.
     track_width_m : float
         Wheel track [m]; sets how long a pivot turn takes.
+    pattern : {"boustrophedon", "spiral"}
+        Adjacent lines back and forth, or rounds inward with the core back and forth
+        (:func:`planner.spiral.order_spiral`).
 
     Returns
     -------
@@ -85,7 +94,7 @@ def plan_coverage(
     >>> from shapely import Polygon
     >>> field = Polygon([(115.298, -8.6265), (115.29813989, -8.62649238),
     ...                  (115.29814712, -8.62631751), (115.29800448, -8.62632237)])
-    >>> plan = plan_coverage(field, interval_m=4.0)
+    >>> plan = plan_coverage(field, interval_m=4.0, angle_deg=1.0)
     >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]]
     (4, ['line_start', 'line_end', 'line_start'])
     """
@@ -96,6 +105,10 @@ def plan_coverage(
     passes = validation.validate_headland_passes(headland_passes)
     speed = validation.validate_speed(speed_mps)
     field_lonlat, area_m2 = validation.validate_field(field_lonlat)
+    if pattern not in PATTERNS:
+        raise InvalidParameterError("pattern", f"must be one of {', '.join(PATTERNS)}")
+    if pattern == "snake":
+        raise InvalidParameterError("pattern", "snake is not available yet")
 
     frame = field_frame(field_lonlat)
     field_local = frame.to_local(field_lonlat)
@@ -105,6 +118,35 @@ def plan_coverage(
     finish_xy = validation.validate_point(
         finish_lonlat, input_name="finish", frame=frame, field_local=field_local
     )
+    if pattern == "spiral":
+        spiral = order_spiral(
+            field_local, interval_m=interval, start_xy=start_xy, finish_xy=finish_xy, objective=goal
+        )
+        spiral_route = spiral.route
+        route = _Route(
+            x=spiral_route.x,
+            y=spiral_route.y,
+            roles=spiral_route.roles,
+            lines=spiral_route.lines,
+            segments=spiral_route.segments,
+        )
+        if finish_xy is not None:
+            route.add("finish", None, [finish_xy])
+        return _assemble(
+            route,
+            frame=frame,
+            field_lonlat=field_lonlat,
+            cells_local=spiral.cells_local,
+            interval_m=interval,
+            heading_deg=spiral.heading_deg,
+            line_count=spiral.line_count,
+            coverage_ratio=spiral.coverage_ratio,
+            coverage_given_up_pp=0.0,
+            speed_mps=speed,
+            track_width_m=track_width_m,
+            area_m2=area_m2,
+            started=started,
+        )
     # A convex field without holes or headland passes is one cell at every heading: the
     # closed-form planner takes it (tight budgets). Everything else is decomposed.
     if passes or not general.is_convex(field_local):
@@ -125,16 +167,23 @@ def plan_coverage(
         )
 
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
-    headings = angles.candidate_headings(ring_xy, fixed_heading)
-    lengths, counts = score_headings(ring_xy, headings, interval, start_xy, finish_xy)
-    best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
-    heading = float(headings[best])
-    # One convex cell: its lines end on the chains, which coverage needs as well.
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
-    chains = convex_chains(u_ring, v_ring)
-    u = line_positions(chains.u_min, chains.u_max, interval)
-    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
-    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
+
+    def lengths_of(headings: FloatArray) -> tuple[VariantLengths, IntArray]:
+        return score_headings(ring_xy, headings, interval, start_xy, finish_xy)
+
+    def coverage_of(headings: FloatArray) -> FloatArray:
+        return convex_coverage(ring_xy, headings, interval)
+
+    choice = angles.search_headings(
+        lengths_of,
+        coverage_of,
+        angles.candidate_headings(ring_xy, fixed_heading),
+        goal,
+        interval_m=interval,
+        refine=fixed_heading is None,
+    )
+    heading, variant = choice.heading_deg, choice.variant
+    u, v_lo, v_hi, coverage_ratio = _convex_plan_lines(ring_xy, heading, interval)
     route = _Route()
     if start_xy is not None:
         route.add("start", None, [start_xy])
@@ -142,8 +191,6 @@ def plan_coverage(
     if finish_xy is not None:
         route.add("finish", None, [finish_xy])
 
-    field_area_local = float(field_local.area)
-    covered = covered_area(chains, u, v_lo, v_hi, interval)
     return _assemble(
         route,
         frame=frame,
@@ -152,12 +199,26 @@ def plan_coverage(
         interval_m=interval,
         heading_deg=heading,
         line_count=len(u),
-        coverage_ratio=covered / field_area_local,
+        coverage_ratio=coverage_ratio,
+        coverage_given_up_pp=choice.coverage_given_up_pp,
         speed_mps=speed,
         track_width_m=track_width_m,
         area_m2=area_m2,
         started=started,
     )
+
+
+def _convex_plan_lines(
+    ring_xy: FloatArray, heading: float, interval_m: float
+) -> tuple[FloatArray, FloatArray, FloatArray, float]:
+    """Place a convex field's lines at ``heading`` (sweep frame); their coverage ratio (R4)."""
+    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
+    chains = convex_chains(u_ring, v_ring)
+    u = line_positions(chains.u_min, chains.u_max, interval_m)
+    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
+    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
+    covered = covered_area(chains, u, v_lo, v_hi, interval_m)
+    return u, v_lo, v_hi, covered / cell_area(chains)
 
 
 def _plan_general(
@@ -201,6 +262,7 @@ def _plan_general(
         heading_deg=plan.heading_deg,
         line_count=plan.line_count,
         coverage_ratio=plan.coverage_ratio,
+        coverage_given_up_pp=plan.coverage_given_up_pp,
         speed_mps=speed_mps,
         track_width_m=track_width_m,
         area_m2=area_m2,
@@ -266,6 +328,7 @@ def _assemble(
     heading_deg: float,
     line_count: int,
     coverage_ratio: float,
+    coverage_given_up_pp: float,
     speed_mps: float,
     track_width_m: float,
     area_m2: float,
@@ -289,7 +352,7 @@ def _assemble(
     seg_length = distance[bounds[:, 1]] - distance[bounds[:, 0]] if len(bounds) else np.zeros(0)
     lengths = {
         kind: float(seg_length[[k == kind for k in kinds]].sum())
-        for kind in ("line", "turn", "transit", "headland")
+        for kind in ("line", "turn", "transit", "headland", "round")
     }
     points = list(zip(lon_list, lat_list, strict=True))
     segments = [
@@ -304,7 +367,7 @@ def _assemble(
         area_m2=round(area_m2, 2),
         line_count=line_count,
         waypoint_count=len(waypoints),
-        working_length_m=round(lengths["line"] + lengths["headland"], 3),
+        working_length_m=round(lengths["line"] + lengths["headland"] + lengths["round"], 3),
         turn_length_m=round(lengths["turn"], 3),
         transit_length_m=round(lengths["transit"], 3),
         path_length_m=round(path_length, 3),
@@ -312,6 +375,7 @@ def _assemble(
         angle_deg=round(heading_deg % 180.0, 6),
         estimated_time_s=round(estimated_time, 1),
         planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
+        coverage_given_up_pp=round(coverage_given_up_pp, 4),
     )
     return CoveragePlan(
         field_lonlat=field_lonlat,

@@ -126,7 +126,11 @@ class PathSegment:
 
 @dataclass(frozen=True, slots=True)
 class PlanStats:
-    """The figures of a plan (product.md §3, "Output")."""
+    """The figures of a plan (product.md §3, "Output").
+
+    ``coverage_given_up_pp`` is how far the chosen heading's coverage is below the best
+    candidate heading's, in percentage points (R5 allows at most 0.2); 0 when none was given up.
+    """
 
     area_m2: float
     line_count: int
@@ -139,6 +143,7 @@ class PlanStats:
     angle_deg: float
     estimated_time_s: float
     planning_ms: float
+    coverage_given_up_pp: float = 0.0
 
     def as_dict(self) -> dict[str, float | int]:
         """Return the figures as a plain dict, in declaration order."""

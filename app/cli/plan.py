@@ -25,6 +25,14 @@ class OutputFormat(StrEnum):
     gpkg = "gpkg"
 
 
+class PatternChoice(StrEnum):
+    """How the path covers the field (product.md §3)."""
+
+    boustrophedon = "boustrophedon"
+    snake = "snake"
+    spiral = "spiral"
+
+
 class ObjectiveChoice(StrEnum):
     """What the heading and order search minimises."""
 
@@ -87,6 +95,10 @@ def plan_command(
     headland: Annotated[
         int, typer.Option("--headland", help="Headland passes around the inside, 0–5.")
     ] = 0,
+    pattern: Annotated[
+        PatternChoice,
+        typer.Option("--pattern", help="Lines back and forth, or rounds inward (spiral)."),
+    ] = PatternChoice.boustrophedon,
     output_format: Annotated[
         OutputFormat, typer.Option("--format", help="Output format.")
     ] = OutputFormat.geojson,
@@ -108,6 +120,7 @@ def plan_command(
         angle_deg=angle,
         objective=objective.value,
         headland_passes=headland,
+        pattern=pattern.value,
     )
     name = spec.name or field.stem
     text: str | bytes

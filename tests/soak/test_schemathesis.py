@@ -2,8 +2,9 @@
 
 Schemathesis (pinned in pyproject.toml) generates requests from ``/openapi.json`` (examples,
 boundary and malformed values, random data and, in the long run, chains of calls that follow
-the API's links) and checks ``not_a_server_error`` on every answer. Short in ``make test``
-(``-n 5``); ``make soak`` runs every phase with more examples.
+the API's links) and checks ``not_a_server_error`` on every answer. Only in ``make soak``
+(every phase, 50 examples): in ``make test`` and CI, tests/app/test_schemathesis.py runs
+schemathesis over every operation on both databases already.
 """
 
 from __future__ import annotations
@@ -16,13 +17,17 @@ from pathlib import Path
 import pytest
 
 from app.testing import ServerProcess
-from tests.soak.conftest import SOAK_S
+from tests.soak.conftest import LONG
 
-pytestmark = pytest.mark.soak
+pytestmark = [
+    pytest.mark.soak,
+    pytest.mark.skipif(
+        not LONG, reason="make soak only: tests/app/test_schemathesis.py covers the short run"
+    ),
+]
 
-LONG = SOAK_S >= 30
-MAX_EXAMPLES = 50 if LONG else 5
-PHASES = "examples,coverage,fuzzing,stateful" if LONG else "examples,coverage"
+MAX_EXAMPLES = 50
+PHASES = "examples,coverage,fuzzing,stateful"
 
 
 def test_schemathesis_finds_no_server_error(database_url: str, tmp_path: Path):
