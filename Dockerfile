@@ -1,47 +1,53 @@
-# tillpath: the map page and the REST API, served by `tillpath serve` (uvicorn).
-# Build and run with PostgreSQL: `docker compose up --build` (see docs/deploy.md).
+# tillpath: the map page and the REST API, served by `tillpath serve` (uvicorn), with background
+# jobs on Dask. Build and run with PostgreSQL: `docker compose up --build` (see docs/deploy.md).
+# The same image runs the Dask scheduler and workers (`dask scheduler`, `dask worker …`).
 
-# --- Front-end libraries (Leaflet, Leaflet-Geoman) from the npm registry, exactly as locked ---
-FROM node:20-bookworm-slim AS frontend
-WORKDIR /app
+# --- Front-end libraries (Leaflet, Leaflet-Geoman, Swagger UI) from npm, exactly as locked -----
+# Node 24 is an LTS line (supported to April 2028). --ignore-scripts: no install-time scripts
+# (swagger-ui-dist's @scarf/scarf would report the install).
+FROM node:24-bookworm-slim AS frontend
+WORKDIR /src
 COPY package.json package-lock.json ./
-RUN npm ci --no-audit --no-fund --omit=dev
+RUN SCARF_ANALYTICS=false npm ci --no-audit --no-fund --omit=dev --ignore-scripts
+
+# --- The wheel: the packages plus templates/, static/, the npm libraries and migrations --------
+FROM python:3.11-slim-bookworm AS wheel
+ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1
+WORKDIR /src
+COPY pyproject.toml setup.py README.md alembic.ini package.json ./
+COPY app ./app
+COPY planner ./planner
+COPY navigation ./navigation
+COPY migrations ./migrations
+COPY templates ./templates
+COPY static ./static
+COPY --from=frontend /src/node_modules ./node_modules
+RUN pip wheel --no-deps -w /dist .
 
 # --- The app -----------------------------------------------------------------------------------
-FROM python:3.11-slim
+FROM python:3.11-slim-bookworm
 
 ENV PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
     PIP_NO_CACHE_DIR=1 \
-    PIP_DISABLE_PIP_VERSION_CHECK=1 \
-    # Import `app` from /app, not from site-packages: it finds templates/, static/,
-    # node_modules/, alembic.ini and migrations/ beside itself.
-    PYTHONPATH=/app
+    PIP_DISABLE_PIP_VERSION_CHECK=1
 
-WORKDIR /app
-
-# Dependencies first (pinned in pyproject.toml), so that code changes rebuild only the last layers.
-COPY pyproject.toml README.md ./
-COPY app ./app
-COPY planner ./planner
-COPY navigation ./navigation
-RUN pip install .
-
-COPY --from=frontend /app/node_modules ./node_modules
-COPY alembic.ini ./
-COPY migrations ./migrations
-COPY templates ./templates
-COPY static ./static
+# Dependencies first, exactly as locked, so that code changes rebuild only the last layer.
+COPY requirements.lock /tmp/requirements.lock
+RUN pip install -r /tmp/requirements.lock && rm /tmp/requirements.lock
+COPY --from=wheel /dist /tmp/dist
+RUN pip install --no-deps /tmp/dist/*.whl && rm -rf /tmp/dist
 
 # Run unprivileged; the default SQLite database (no TILLPATH_DATABASE_URL) goes to /app/data.
 RUN useradd --create-home --uid 10001 tillpath \
     && mkdir -p /app/data \
     && chown tillpath:tillpath /app/data
+WORKDIR /app
 USER tillpath
 
 EXPOSE 8000
-HEALTHCHECK --interval=30s --timeout=5s --start-period=20s --retries=3 \
+HEALTHCHECK --interval=30s --timeout=5s --start-period=30s --retries=3 \
     CMD ["python", "-c", "import sys, urllib.request; sys.exit(urllib.request.urlopen('http://127.0.0.1:8000/api/health', timeout=4).status != 200)"]
 
-# Applies the migrations, then serves.
+# Applies the migrations, starts (or joins) the job engine, then serves.
 CMD ["tillpath", "serve", "--host", "0.0.0.0", "--port", "8000"]

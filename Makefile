@@ -5,24 +5,42 @@ BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test bench soak install install-dev lint typecheck clean screenshot messages
+.PHONY: run test bench soak install install-dev lint typecheck clean screenshot messages lock wheel
 
-# Python environment, rebuilt when the declared dependencies change. `make run` needs only the
-# runtime dependencies; the test and lint tools come with install-dev (`make test`).
-$(BIN)/.installed: pyproject.toml
+# Python environment, exactly as locked (every transitive package pinned), rebuilt when the lock
+# changes; the project itself is installed without resolving anything. `make run` needs only the
+# runtime lock (requirements.lock); the test and lint tools come with install-dev
+# (requirements-dev.lock, `make test`).
+$(BIN)/.installed: pyproject.toml requirements.lock
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet -r requirements.lock
+	$(BIN)/python -m pip install --quiet --no-deps -e .
 	touch $@
 
-$(BIN)/.installed-dev: $(BIN)/.installed
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+$(BIN)/.installed-dev: $(BIN)/.installed requirements-dev.lock
+	$(BIN)/python -m pip install --quiet -r requirements-dev.lock
 	touch $@
 
-# Front-end libraries (Leaflet, Leaflet-Geoman) from the npm registry, exactly as locked.
+# Front-end libraries (Leaflet, Leaflet-Geoman, Swagger UI) from the npm registry, exactly as
+# locked; no install scripts (swagger-ui-dist's @scarf/scarf would report the install).
 node_modules/.installed: package.json package-lock.json
-	npm ci --no-audit --no-fund --silent
+	SCARF_ANALYTICS=false npm ci --no-audit --no-fund --silent --ignore-scripts
 	touch $@
+
+# Refresh both lock files from pyproject.toml (after adding or bumping a dependency there).
+# uv resolves for every platform (--universal), for the oldest Python we support.
+UV_COMPILE = $(BIN)/uv pip compile pyproject.toml --universal --python-version 3.11 \
+	--custom-compile-command "make lock" --quiet
+lock: $(BIN)/.installed-dev
+	$(UV_COMPILE) -o requirements.lock
+	$(UV_COMPILE) --extra dev -o requirements-dev.lock
+
+# A wheel that serves the page from any directory: templates, static files, the npm libraries,
+# migrations and alembic.ini inside it (see setup.py).
+wheel: install
+	rm -rf build dist
+	$(BIN)/python -m pip wheel --quiet --no-deps -w dist .
 
 install: $(BIN)/.installed node_modules/.installed
 

@@ -319,10 +319,12 @@ def _exists(session: Session, model: type[Base], ident: int) -> bool:
 def project_root() -> Path:
     """Return the directory that holds ``alembic.ini`` and ``migrations/``.
 
-    That is the checkout the ``app`` package was imported from, or else the current directory
-    (the Docker image installs the package and keeps the project in its working directory).
+    That is the installed wheel's copy (:func:`app.resources.resource_root`), the checkout the
+    ``app`` package was imported from, or else the current directory.
     """
-    candidates = [Path(__file__).resolve().parent.parent, Path.cwd()]
+    from app.resources import resource_root
+
+    candidates = [resource_root(), Path(__file__).resolve().parent.parent, Path.cwd()]
     for root in candidates:
         if (root / "alembic.ini").is_file() and (root / "migrations" / "env.py").is_file():
             return root

@@ -142,6 +142,10 @@ class DatabaseUnavailableError(RuntimeError):
     """The database could not be reached or gave no connection in time."""
 
 
+class UnavailableError(RuntimeError):
+    """The server cannot do this now or in this setup (no job engine): 503."""
+
+
 #: The one table: exception class -> HTTP status. Looked up along the class's MRO, so a
 #: subclass without its own row gets its parent's status.
 STATUS_CODES: Final[dict[type[Exception], int]] = {
@@ -166,6 +170,7 @@ STATUS_CODES: Final[dict[type[Exception], int]] = {
     OperationalError: 503,
     IntegrityError: 409,
     DataError: 422,
+    UnavailableError: 503,
 }
 
 #: What the client reads for the database's own errors (their text would leak SQL).

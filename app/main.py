@@ -5,15 +5,20 @@ Run it with ``tillpath serve`` (uvicorn's factory mode: ``app.main:create_app``)
 
 from __future__ import annotations
 
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
 from fastapi import FastAPI
 from starlette.middleware.gzip import GZipMiddleware
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
+from app.jobs import jobs_lifespan
 from app.routers import (
     auth,
     field_files,
     fields,
     health,
+    jobs,
     members,
     pages,
     plans,
@@ -41,7 +46,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     -------
     FastAPI
     """
+    resolved = settings or get_settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        async with jobs_lifespan(app, resolved):
+            yield
+
     app = FastAPI(
+        lifespan=lifespan,
         title="tillpath",
         summary="Tillage paths for autonomous walk-behind hand tractors",
         description=(
@@ -68,6 +81,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(simulations.router, prefix=API_PREFIX)
     app.include_router(runs.router, prefix=API_PREFIX)
     app.include_router(field_files.router, prefix=API_PREFIX)
+    app.include_router(jobs.router, prefix=API_PREFIX)
     app.include_router(health.router, prefix=API_PREFIX)
     app.include_router(auth.router, prefix=API_PREFIX)
     app.include_router(fields.router, prefix=API_PREFIX)

@@ -21,6 +21,7 @@ from sqlalchemy import (
     Double,
     ForeignKey,
     Integer,
+    SmallInteger,
     String,
     Text,
 )
@@ -203,6 +204,13 @@ class Fix(Base):
         Course over ground or compass heading, clockwise from true north [deg].
     speed_mps : float or None
         Speed over ground [m/s].
+    quality : str or None
+        Fix quality where the log says it (``rtk_fixed``, ``rtk_float``, ``dgps``, ``single``,
+        ``dead_reckoning``; :data:`app.tracks.FIX_QUALITIES`).
+    hdop : float or None
+        Horizontal dilution of precision.
+    satellites : int or None
+        Satellites used in the fix.
     """
 
     __tablename__ = "fixes"
@@ -213,6 +221,9 @@ class Fix(Base):
     lon: Mapped[float] = mapped_column(Double)
     heading_deg: Mapped[float | None] = mapped_column(Double)
     speed_mps: Mapped[float | None] = mapped_column(Double)
+    quality: Mapped[str | None] = mapped_column(String(16))
+    hdop: Mapped[float | None] = mapped_column(Double)
+    satellites: Mapped[int | None] = mapped_column(SmallInteger)
 
 
 class Field(Base):
@@ -258,3 +269,70 @@ class Field(Base):
 # The workspace's tables (organisations, users, tokens) live in their own module; importing it
 # here registers them on Base.metadata wherever the models are loaded (Alembic, the app).
 from app import auth_models as _auth_models  # noqa: E402,F401
+
+#: The states of a background job (product.md §13); the last three are final.
+JOB_STATUSES = ("queued", "running", "done", "failed", "cancelled")
+JOB_FINAL_STATUSES = ("done", "failed", "cancelled")
+
+
+class Job(Base):
+    """A background job: what was asked, how far it has got, and what came of it (§13).
+
+    A job runs on the Dask engine (:mod:`app.jobs`). The worker that runs it holds a *lease*
+    (``lease_token`` until ``lease_expires_at``, renewed as it reports progress); only the
+    holder of the current lease may report progress or finish the job, so a job that is run
+    again after a restart or a lost worker finishes once.
+
+    Attributes
+    ----------
+    id : int
+        Primary key.
+    organisation_id : int
+        The organisation that asked for it; deleting the organisation deletes its jobs.
+    kind : str
+        What to run (``simulation``, ``monte_carlo`` …; see :data:`app.jobs.JOB_KINDS`).
+    params : dict
+        What was asked: the kind's parameters, as JSON.
+    status : str
+        ``queued``, ``running``, ``done``, ``failed`` or ``cancelled``.
+    progress : float
+        How far it has got, 0–1.
+    result : dict or None
+        What the job produced (done only).
+    result_url : str or None
+        Where the result lives (``/api/simulations/7``), if it is a stored row.
+    error : str or None
+        Why it failed, naming the input and the problem (failed only).
+    attempts : int
+        How many times a worker started it.
+    lease_owner : str or None
+        The engine (one per server start) whose worker runs it.
+    lease_token : str or None
+        The current attempt's token.
+    lease_expires_at : datetime or None
+        When the lease lapses unless renewed; a running job past it is run again.
+    created_at, started_at, updated_at, finished_at : datetime
+        UTC.
+    """
+
+    __tablename__ = "jobs"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    organisation_id: Mapped[int] = mapped_column(
+        ForeignKey("organisations.id", ondelete="CASCADE"), index=True
+    )
+    kind: Mapped[str] = mapped_column(String(32))
+    params: Mapped[dict[str, Any]] = mapped_column(JSON)
+    status: Mapped[str] = mapped_column(String(16), default="queued", index=True)
+    progress: Mapped[float] = mapped_column(Double, default=0.0)
+    result: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    result_url: Mapped[str | None] = mapped_column(String(200))
+    error: Mapped[str | None] = mapped_column(String(2000))
+    attempts: Mapped[int] = mapped_column(Integer, default=0)
+    lease_owner: Mapped[str | None] = mapped_column(String(64))
+    lease_token: Mapped[str | None] = mapped_column(String(64))
+    lease_expires_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime())
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
+    started_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime())
+    updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
+    finished_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime())

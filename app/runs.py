@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Final
 
 import numpy as np
@@ -24,9 +24,11 @@ from sqlalchemy.orm import Session
 
 from app import ingest
 from app.auth import Access, owned
-from app.db import end_reads, write
+from app.db import add_row, end_reads, write
 from app.errors import ConflictError, NotFoundError
+from app.missed import missed_ground_geojson, plan_follow_up
 from app.models import Fix, Plan, Run
+from app.receiver import receiver_report
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
 from app.services import (
     EXPORT_TYPES,
@@ -51,8 +53,8 @@ from planner.export.kml import plan_to_kml
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Rows per bulk ``INSERT`` statement (6 parameters each: under SQLite's 32,766 limit).
-INSERT_CHUNK_ROWS: Final = 5000
+#: Rows per bulk ``INSERT`` statement (9 parameters each: under SQLite's 32,766 limit).
+INSERT_CHUNK_ROWS: Final = 3000
 #: Most vertices of the track returned for display.
 MAX_TRACK_POINTS: Final = 20_000
 #: Rows fetched from the driver at a time when a run's track is loaded.
@@ -73,6 +75,10 @@ class RunTrack:
         WGS84 [deg].
     heading_deg, speed_mps : float arrays
         NaN where unknown.
+    quality : list of (str or None)
+        Fix quality per fix (:data:`app.tracks.FIX_QUALITIES`), None where unknown.
+    hdop, satellites : float arrays
+        NaN where unknown.
     """
 
     t: npt.NDArray[np.int64]
@@ -80,6 +86,9 @@ class RunTrack:
     lat: FloatArray
     heading_deg: FloatArray
     speed_mps: FloatArray
+    quality: list[str | None] = field(default_factory=list)
+    hdop: FloatArray = field(default_factory=lambda: np.array([], dtype=float))
+    satellites: FloatArray = field(default_factory=lambda: np.array([], dtype=float))
 
     def time_s(self) -> FloatArray:
         """Seconds since the first fix."""
@@ -216,6 +225,9 @@ def add_fixes(session: Session, run: Run, fixes_in: Sequence[FixIn]) -> tuple[in
             lon=f.lon,
             heading_deg=f.heading_deg,
             speed_mps=f.speed_mps,
+            quality=f.quality,
+            hdop=f.hdop,
+            satellites=f.satellites,
         )
         for i, f in enumerate(fixes_in)
     ]
@@ -267,13 +279,15 @@ def load_track(session: Session, run_id: int) -> RunTrack:
     try:
         # ``run_id`` is an int: formatting it in is safe, and spares the two paramstyles.
         cursor.execute(
-            "SELECT t, lon, lat, heading_deg, speed_mps FROM fixes "
+            "SELECT t, lon, lat, heading_deg, speed_mps, hdop, satellites, quality FROM fixes "
             f"WHERE run_id = {int(run_id)} ORDER BY t"
         )
         # In blocks: the driver's row tuples of a whole day's log would take ~250 bytes a fix.
         blocks = []
+        quality: list[str | None] = []
         while rows := cursor.fetchmany(_LOAD_BLOCK_ROWS):
-            blocks.append(np.array(rows, dtype=np.float64))  # None -> nan
+            blocks.append(np.array([row[:7] for row in rows], dtype=np.float64))  # None -> nan
+            quality.extend(row[7] for row in rows)
     finally:
         cursor.close()
     if not blocks:
@@ -287,11 +301,20 @@ def load_track(session: Session, run_id: int) -> RunTrack:
         lat=table[:, 2],
         heading_deg=table[:, 3],
         speed_mps=table[:, 4],
+        quality=quality,
+        hdop=table[:, 5],
+        satellites=table[:, 6],
     )
 
 
-def score_run(plan: Plan, track: RunTrack, *, threshold_m: float) -> TrackMetrics | None:
-    """Score a run's track against its plan with :func:`navigation.score_track` (None if empty)."""
+def score_run(
+    plan: Plan, track: RunTrack, *, threshold_m: float, live: bool = False
+) -> TrackMetrics | None:
+    """Score a run's track against its plan with :func:`navigation.score_track` (None if empty).
+
+    A live run is scored on the part of the plan driven so far: waypoints not yet reached get
+    no error.
+    """
     if len(track.t) == 0:
         return None
     return score_track(
@@ -300,6 +323,7 @@ def score_run(plan: Plan, track: RunTrack, *, threshold_m: float) -> TrackMetric
         track.lon,
         track.lat,
         threshold_m=threshold_m,
+        live=live,
     )
 
 
@@ -343,7 +367,7 @@ def run_view(
         raise NotFoundError("run", run.id)
     track = load_track(session, run.id)
     end_reads(session)  # no connection held while scoring
-    metrics = score_run(plan, track, threshold_m=threshold_m)
+    metrics = score_run(plan, track, threshold_m=threshold_m, live=run.source == "live")
     n = len(track.t)
     view: dict[str, Any] = {
         "id": run.id,
@@ -358,9 +382,12 @@ def run_view(
         "metrics": json_ready(metrics.as_dict()) if metrics else None,
         "track": None,
         "stretches": {"type": "FeatureCollection", "features": []},
+        "receiver": json_ready(receiver_report(track.quality, track.hdop, track.satellites)),
+        "missed": {"type": "FeatureCollection", "features": []},
     }
     if not n:
         return view
+    view["missed"] = json_ready(missed_ground_geojson(plan, track))
     view["last_fix"] = {
         "t": us_to_datetime(int(track.t[-1])),
         "lat": float(track.lat[-1]),
@@ -398,6 +425,25 @@ def run_view(
         )
     view["stretches"]["features"] = features
     return view
+
+
+def follow_up_plan(session: Session, run: Run, *, budget_s: float) -> Plan:
+    """Plan the ground ``run`` missed (:func:`app.missed.plan_follow_up`), store it, commit.
+
+    Raises
+    ------
+    ConflictError
+        If the run has no fix yet, or missed nothing that can be planned.
+    """
+    plan = session.get(Plan, run.plan_id)
+    if plan is None:
+        raise NotFoundError("run", run.id)
+    track = load_track(session, run.id)
+    if len(track.t) == 0:
+        raise ConflictError(f"run {run.id}: has no fix yet; there is no missed ground to plan")
+    end_reads(session)  # no connection held while planning
+    follow_up = plan_follow_up(plan, track, run_id=run.id, budget_s=budget_s)
+    return add_row(session, follow_up, parent=(Plan, plan.id, "plan"))
 
 
 def _stretch_dict(stretch: Any) -> dict[str, Any]:

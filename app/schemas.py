@@ -200,6 +200,8 @@ GuidanceMode = Literal["waypoint", "line"]
 
 #: Largest seed accepted (numpy takes any non-negative integer; this keeps it in a JSON int).
 MAX_SEED = 2**63 - 1
+#: Most Monte Carlo runs one web request may ask for (a background job, product.md §13).
+MAX_WEB_RUNS = 500
 
 
 class SimulationCreate(BaseModel):
@@ -217,6 +219,13 @@ class SimulationCreate(BaseModel):
     guidance: GuidanceMode = Field(
         default="waypoint",
         description="`waypoint` (the paper's law) or `line` (pure pursuit along the plan).",
+    )
+    runs: int = Field(
+        default=1,
+        ge=1,
+        le=MAX_WEB_RUNS,
+        description="Monte Carlo runs over seeds `seed … seed+runs-1`; more than one gives a "
+        "summary of each metric and stores the run of median cross-track RMS.",
     )
 
 
@@ -241,14 +250,35 @@ class MetricsRead(BaseModel):
     cross_track_max_m: float | None
     cross_track_rms_m: float | None
     cross_track_p95_m: float | None
-    waypoint_error_max_m: float
-    waypoint_error_mean_m: float
-    waypoint_errors_m: list[float]
+    turn_cross_track_max_m: float | None = None
+    turn_cross_track_rms_m: float | None = None
+    waypoint_error_max_m: float | None
+    waypoint_error_mean_m: float | None
+    line_waypoint_error_max_m: float | None = None
+    waypoint_errors_m: list[float | None]
+    waypoints_reached: int | None = None
+    plan_progress: float | None = None
     coverage_ratio: float
+    coverage_of_driven_ratio: float | None = None
+    implement_width_m: float | None = None
     threshold_m: float
     stretches: list[StretchRead]
     filter_rms_m: float | None = None
     gps_rms_m: float | None = None
+    waypoint_error_estimate_max_m: float | None = None
+    waypoint_error_estimate_mean_m: float | None = None
+    line_waypoint_error_estimate_max_m: float | None = None
+    waypoint_errors_estimate_m: list[float | None] | None = None
+    nees_mean: float | None = None
+    nees_dof: int | None = None
+    nees_bounds_95: list[float] | None = None
+    nees_within_bounds: bool | None = None
+    nis_mean: float | None = None
+    nis_dof: int | None = None
+    nis_bounds_95: list[float] | None = None
+    nis_within_bounds: bool | None = None
+    compass_bias_estimate_deg: float | None = None
+    compass_bias_true_deg: float | None = None
 
 
 class SimulationRead(BaseModel):
@@ -325,6 +355,11 @@ class FixIn(BaseModel):
     speed_mps: float | None = Field(
         default=None, ge=0, le=MAX_SPEED_MPS, description="Speed over ground [m/s], 0–100."
     )
+    quality: Literal["rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning"] | None = Field(
+        default=None, description="Fix quality, as the receiver reported it."
+    )
+    hdop: float | None = Field(default=None, ge=0, description="Horizontal dilution of precision.")
+    satellites: int | None = Field(default=None, ge=0, le=255, description="Satellites used.")
 
 
 class FixesAdded(BaseModel):
@@ -386,4 +421,16 @@ class RunRead(RunSummary):
     )
     stretches: dict[str, Any] = Field(
         description="GeoJSON FeatureCollection: a LineString per stretch over the threshold."
+    )
+    receiver: dict[str, Any] = Field(
+        default_factory=dict,
+        description="How good the fixes were: `shares` of each fix quality (rtk_fixed, "
+        "rtk_float, dgps, single, dead_reckoning, unknown), `hdop_median`, "
+        "`satellites_median`, `accuracy` (centimetre, decimetre, metre, unknown), "
+        "`metre_level` and a `note` saying what the figures are worth.",
+    )
+    missed: dict[str, Any] = Field(
+        default_factory=dict,
+        description="GeoJSON FeatureCollection: a Polygon per piece of the field the run's "
+        "implement footprint did not cover (`kind: missed`, `area_m2`).",
     )

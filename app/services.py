@@ -13,6 +13,7 @@ import json
 import math
 import re
 import unicodedata
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final, TypeVar
 
@@ -271,7 +272,13 @@ def polygon_to_geojson(polygon: Polygon) -> dict[str, Any]:
     }
 
 
-def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = None) -> Simulation:
+def simulate_plan(
+    plan: Plan,
+    body: SimulationCreate,
+    *,
+    date: dt.date | None = None,
+    on_waypoint: Callable[[int, int], None] | None = None,
+) -> Simulation:
     """Drive stored ``plan`` with the simulated tractor; return an unsaved :class:`Simulation`.
 
     Parameters
@@ -283,6 +290,8 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
     date : date, optional
         Date of the run, for the magnetic declination; default today (UTC). It is stored in
         the configuration, so the run can be repeated exactly.
+    on_waypoint : callable, optional
+        Progress hook, passed to :func:`navigation.simulate`.
 
     Returns
     -------
@@ -295,7 +304,12 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
     """
     date = date or utc_now().date()
     config = SimulationConfig(gps=body.gps, guidance=GuidanceParams(mode=body.guidance), date=date)
-    log = simulate(coverage_plan_from_row(plan), config, np.random.default_rng(body.seed))
+    log = simulate(
+        coverage_plan_from_row(plan),
+        config,
+        np.random.default_rng(body.seed),
+        on_waypoint=on_waypoint,
+    )
     return Simulation(
         plan_id=plan.id,
         organisation_id=plan.organisation_id,
@@ -304,6 +318,7 @@ def simulate_plan(plan: Plan, body: SimulationCreate, *, date: dt.date | None = 
             "gps": body.gps,
             "guidance": body.guidance,
             "date": date.isoformat(),
+            "vehicle": log.config.vehicle.preset if log.config.vehicle else None,
         },
         metrics=json_ready(log.metrics.as_dict()),
         tracks=json_ready(simulation_to_geojson(log)),

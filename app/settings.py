@@ -55,6 +55,11 @@ class Settings(BaseSettings):
         request [s]; longer gets 422 naming the limit (:mod:`app.budget`).
     secure_cookies : bool
         Mark the session cookie ``Secure`` (sent over HTTPS only). Turn it on behind TLS.
+    dask_scheduler : str or None
+        Address of a Dask scheduler (``tcp://host:8786``) that runs the background jobs
+        (product.md §13). None: the server starts a local cluster of its own.
+    dask_workers : int or None
+        Worker processes of that local cluster (default: one per CPU core).
     """
 
     model_config = SettingsConfigDict(env_prefix="TILLPATH_", extra="ignore")
@@ -74,6 +79,8 @@ class Settings(BaseSettings):
     backlog: int = Field(default=256, ge=1, le=65_535)
     planning_budget_s: float = Field(default=1.5, gt=0, le=600)
     secure_cookies: bool = False
+    dask_scheduler: str | None = None
+    dask_workers: int | None = Field(default=None, ge=1)
 
 
 @lru_cache

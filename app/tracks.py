@@ -89,6 +89,8 @@ _GGA_QUALITIES: Final = {
     5: "rtk_float",
     6: "dead_reckoning",
 }
+#: GPX 1.1 ``<fix>`` values (none, 2d, 3d, dgps, pps) mapped where they say something.
+GPX_FIXES: Final[dict[str, str]] = {"2d": "single", "3d": "single", "dgps": "dgps"}
 
 
 class TrackFormatError(ValueError):
@@ -578,9 +580,22 @@ def _gpx_point(elem: Any, track: int) -> TrackFix | None:
         lon=lon,
         heading_deg=heading,
         speed_mps=speed,
+        quality=GPX_FIXES.get(values.get("fix", "").lower()),
         hdop=hdop if hdop is not None and 0 <= hdop <= 1000 else None,
         satellites=int(sat) if sat is not None and 0 <= sat <= 1000 else None,
     )
+
+
+def _float_or_none(value: object) -> float | None:
+    try:
+        return None if value in (None, "") else float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return None
+
+
+def _int_or_none(value: object) -> int | None:
+    number = _float_or_none(value)
+    return int(number) if number is not None and number >= 0 else None
 
 
 def _finite_or_none(value: float | None) -> float | None:

@@ -1,9 +1,11 @@
 """Magnetic declination from the World Magnetic Model, and the paper's compass heading.
 
 The paper's algorithm 2 turns the magnetometer's horizontal components into a heading and adds
-the magnetic declination. The declination comes from the World Magnetic Model 2025 (pygeomag,
-with the WMM-2025 coefficient file it ships): the paper's equation 20 is the *sun's*
-declination, which has nothing to do with a compass, and is not used.
+the magnetic declination. The declination comes from the World Magnetic Model valid at the
+date (pygeomag, with the coefficient files it ships): WMM2020 for 2020.0–2025.0 (the paper's
+trial, 2021, falls here), WMM2025 for 2025.0–2030.0. A date outside both is an error, not an
+extrapolation. The paper's equation 20 is the *sun's* declination, which has nothing to do
+with a compass, and is not used.
 """
 
 from __future__ import annotations
@@ -16,14 +18,44 @@ from pygeomag import GeoMag
 
 from navigation.types import NavigationError
 
-#: The coefficient file pygeomag ships for WMM-2025 (valid 2025.0 to 2030.0), relative to the
-#: pygeomag package. Named explicitly rather than relying on pygeomag's default file.
+#: The World Magnetic Models and the coefficient files pygeomag 1.1.0 ships for them, relative
+#: to the pygeomag package, with the years each is valid for: (name, file, first, end).
+WMM_MODELS: tuple[tuple[str, str, float, float], ...] = (
+    ("WMM2020", "wmm/WMM_2020.COF", 2020.0, 2025.0),
+    ("WMM2025", "wmm/WMM_2025.COF", 2025.0, 2030.0),
+)
 WMM_2025_FILE = "wmm/WMM_2025.COF"
 
 
-@lru_cache(maxsize=1)
-def _wmm_2025() -> GeoMag:
-    return GeoMag(coefficients_file=WMM_2025_FILE)
+@lru_cache(maxsize=4)
+def _geomag(coefficients_file: str) -> GeoMag:
+    return GeoMag(coefficients_file=coefficients_file)
+
+
+def wmm_model_for(year: float) -> tuple[str, str]:
+    """Name and coefficient file of the World Magnetic Model valid at decimal ``year``.
+
+    A model's life span is ``[first, end)``, except that the last one includes its end.
+
+    Raises
+    ------
+    NavigationError
+        If no shipped model covers ``year``.
+
+    Examples
+    --------
+    >>> wmm_model_for(2021.08)[0], wmm_model_for(2025.0)[0], wmm_model_for(2030.0)[0]
+    ('WMM2020', 'WMM2025', 'WMM2025')
+    """
+    for name, path, first, end in WMM_MODELS:
+        if first <= year < end or (year == end and path == WMM_MODELS[-1][1]):
+            return name, path
+    spans = ", ".join(f"{n} {a:.0f}–{b:.0f}" for n, _, a, b in WMM_MODELS)
+    raise NavigationError(
+        "date",
+        f"{year:.2f} is outside every World Magnetic Model tillpath has ({spans}); "
+        "the declination cannot be computed for it",
+    )
 
 
 def decimal_year(date: dt.date) -> float:
@@ -44,21 +76,21 @@ def decimal_year(date: dt.date) -> float:
 def magnetic_declination_deg(
     lon: float, lat: float, *, date: dt.date | float, altitude_km: float = 0.0
 ) -> float:
-    """Magnetic declination (east positive) from WMM-2025 [deg].
+    """Magnetic declination (east positive) from the World Magnetic Model of the date [deg].
 
     Parameters
     ----------
     lon, lat : float
         WGS84 degrees.
     date : datetime.date or float
-        The date, or a decimal year, within the model's life span 2025.0–2030.0.
+        The date, or a decimal year, within 2020.0–2030.0 (WMM2020, then WMM2025).
     altitude_km : float
         Height above the WGS84 ellipsoid [km].
 
     Raises
     ------
     NavigationError
-        If the date is outside WMM-2025's life span or the position is invalid.
+        If no model covers the date, or the position is invalid.
 
     Examples
     --------
@@ -66,14 +98,13 @@ def magnetic_declination_deg(
     0.8
     """
     year = decimal_year(date) if isinstance(date, dt.date) else float(date)
-    if not (2025.0 <= year <= 2030.0):
-        raise NavigationError(
-            "date", f"{year:.2f} is outside the World Magnetic Model 2025's life span (2025–2030)"
-        )
+    if not math.isfinite(year):
+        raise NavigationError("date", "must be a finite decimal year")
+    _, coefficients = wmm_model_for(year)
     if not (math.isfinite(lon) and math.isfinite(lat) and -90.0 <= lat <= 90.0):
         raise NavigationError("position", f"({lon}, {lat}) is not a longitude/latitude")
     lon = (lon + 180.0) % 360.0 - 180.0
-    result = _wmm_2025().calculate(glat=lat, glon=lon, alt=altitude_km, time=year)
+    result = _geomag(coefficients).calculate(glat=lat, glon=lon, alt=altitude_km, time=year)
     return float(result.d)
 
 

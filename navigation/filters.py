@@ -1,8 +1,15 @@
 """Extended Kalman filter of the tractor's position and heading (filterpy).
 
 State ``x = [x, y, θ]``: position in the local frame [m] and heading clockwise from true north
-[rad]. Control ``u = [v, ω]``: axle-centre speed [m/s] and yaw rate [rad/s, clockwise], which
-the controller knows from the clutch it pulled (a pivot halves the centre speed). GPS measures
+[rad]; or, augmented (:func:`augmented_x0`), ``x = [x, y, θ, b, e_x, e_y]`` with the compass
+bias ``b`` [rad] and the receiver's slowly wandering error ``e`` [m] as states. A u-blox
+receiver's error is not white: it wanders over tens of seconds (multipath, atmosphere), and a
+filter that treats it as white noise averages it away on paper only and states an uncertainty
+ten times too small. Modelled as the first-order Gauss–Markov process it is simulated as
+(``e' = φ e + w``, ``φ = exp(-Δt/τ)``, ``var w = σ²(1-φ²)``), the filter's covariance stays
+honest: its position NEES matches its χ² bounds (docs/simulation.md). The GPS then measures
+``x + e``, the compass ``θ + b``. Control ``u = [v, ω]``: axle-centre speed [m/s] and yaw
+rate [rad/s, clockwise], which the controller knows from the clutch it pulled. GPS measures
 ``[x, y]``; the compass measures ``θ``. Headings are angles, so the compass residual is wrapped
 to ±π (filterpy's ``residual=``) and ``x[2]`` is wrapped after every update: a reading of 1°
 against an estimate of 359° is a 2° correction, not a 358° one.
@@ -19,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 from filterpy.kalman import ExtendedKalmanFilter
 
-from navigation.types import FilterParams
+from navigation.types import FilterParams, GpsParams
 from navigation.vehicle import wrap_angle
 
 FloatArray = npt.NDArray[np.float64]
@@ -28,6 +35,10 @@ FloatArray = npt.NDArray[np.float64]
 _H_GPS = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _H_COMPASS = np.array([[0.0, 0.0, 1.0]])
 _H_POSE = np.eye(3)
+#: The same for the augmented state [x, y, θ, b, e_x, e_y].
+_H_GPS6 = np.array([[1.0, 0, 0, 0, 1.0, 0], [0, 1.0, 0, 0, 0, 1.0]])
+_H_COMPASS6 = np.array([[0, 0, 1.0, 1.0, 0, 0]])
+_H_POSE6 = np.vstack([_H_GPS6, _H_COMPASS6])
 
 
 def fx(x: FloatArray, u: FloatArray, dt_s: float) -> FloatArray:
@@ -88,6 +99,67 @@ def H_pose(x: FloatArray) -> FloatArray:  # noqa: N802 (filterpy's names)
     return _H_POSE
 
 
+def hx_gps6(x: FloatArray) -> FloatArray:
+    """Augmented GPS model: position plus the receiver's wander."""
+    return _H_GPS6 @ x
+
+
+def H_gps6(x: FloatArray) -> FloatArray:  # noqa: N802 (filterpy's names)
+    """Jacobian of :func:`hx_gps6`."""
+    return _H_GPS6
+
+
+def hx_compass6(x: FloatArray) -> FloatArray:
+    """Augmented compass model: heading plus bias."""
+    return _H_COMPASS6 @ x
+
+
+def H_compass6(x: FloatArray) -> FloatArray:  # noqa: N802 (filterpy's names)
+    """Jacobian of :func:`hx_compass6`."""
+    return _H_COMPASS6
+
+
+def hx_pose6(x: FloatArray) -> FloatArray:
+    """Augmented GPS and compass together."""
+    return _H_POSE6 @ x
+
+
+def H_pose6(x: FloatArray) -> FloatArray:  # noqa: N802 (filterpy's names)
+    """Jacobian of :func:`hx_pose6`."""
+    return _H_POSE6
+
+
+def augmented_x0(
+    gps_xy_m: tuple[float, float],
+    heading_rad: float,
+    *,
+    gps: GpsParams,
+    heading_sigma_rad: float,
+    params: FilterParams,
+) -> tuple[FloatArray, FloatArray]:
+    """Return the augmented filter's initial state and covariance from the first fix.
+
+    The first fix is ``x + e + w``: taking it as the position (and 0 as the wander) leaves a
+    position error ``-(e + w)`` that is correlated with the wander's error ``e``, so ``P0``
+    carries that correlation (``-σ_e²``); without it the filter would be inconsistent from
+    the start. Likewise the heading error is ``-(b + noise)``, correlated with the bias.
+    """
+    var_e = gps.correlated_sigma_m**2
+    var_w = gps.white_sigma_m**2
+    var_b = math.radians(params.compass_bias_sigma_deg) ** 2
+    var_h = heading_sigma_rad**2
+    x0 = np.array([gps_xy_m[0], gps_xy_m[1], heading_rad, 0.0, 0.0, 0.0])
+    P0 = np.zeros((6, 6))
+    for i, j in ((0, 4), (1, 5)):
+        P0[i, i] = var_e + var_w
+        P0[j, j] = var_e
+        P0[i, j] = P0[j, i] = -var_e
+    P0[2, 2] = var_b + var_h
+    P0[3, 3] = var_b
+    P0[2, 3] = P0[3, 2] = -var_b
+    return x0, P0
+
+
 def residual_pose(z: FloatArray, z_pred: FloatArray) -> FloatArray:
     """Innovation of ``[x, y, θ]`` with the heading wrapped to [-π, π)."""
     return np.array([z[0] - z_pred[0], z[1] - z_pred[1], wrap_angle(float(z[2] - z_pred[2]))])
@@ -109,6 +181,18 @@ def Q_process(params: FilterParams, dt_s: float) -> FloatArray:  # noqa: N802 (f
     q_pos = params.position_sigma_m_per_sqrt_s**2 * dt_s
     q_heading = math.radians(params.heading_sigma_deg_per_sqrt_s) ** 2 * dt_s
     return np.diag([q_pos, q_pos, q_heading])
+
+
+def Q_augmented(params: FilterParams, gps: GpsParams, dt_s: float) -> FloatArray:  # noqa: N802
+    """Process noise of the augmented state over ``dt_s``: the pose's, the bias's, the wander's."""
+    phi = math.exp(-dt_s / gps.correlation_time_s)
+    q_e = gps.correlated_sigma_m**2 * (1.0 - phi**2)
+    q_b = math.radians(params.compass_bias_drift_deg_per_sqrt_s) ** 2 * dt_s
+    Q = np.zeros((6, 6))
+    Q[:3, :3] = Q_process(params, dt_s)
+    Q[3, 3] = q_b
+    Q[4, 4] = Q[5, 5] = q_e
+    return Q
 
 
 class _TractorEKF(ExtendedKalmanFilter):  # type: ignore[misc]
@@ -145,11 +229,21 @@ class PoseFilter:
     350.0
     """
 
-    def __init__(self, x0: FloatArray, P0: FloatArray, *, params: FilterParams) -> None:
-        self.ekf = _TractorEKF(dim_x=3, dim_z=3)
+    def __init__(
+        self, x0: FloatArray, P0: FloatArray, *, params: FilterParams, gps: GpsParams | None = None
+    ) -> None:
+        dim = len(x0)
+        if dim not in (3, 6) or (dim == 6 and gps is None):
+            raise ValueError("x0: give [x, y, θ], or the 6 augmented states with the GPS model")
+        self.ekf = _TractorEKF(dim_x=dim, dim_z=3)
         self.ekf.x = np.array(x0, dtype=float)
         self.ekf.P = np.array(P0, dtype=float)
         self.params = params
+        self.gps = gps
+        self.augmented = dim == 6
+        #: Normalised innovation squared of the last update, and its degrees of freedom.
+        self.nis: float | None = None
+        self.nis_dof = 0
         self._matrices: dict[tuple[str | float, ...], FloatArray] = {}
         self._reset_interval()
 
@@ -159,7 +253,11 @@ class PoseFilter:
         matrix = self._matrices.get(key)
         if matrix is None:
             if kind == "Q":
-                matrix = Q_process(self.params, args[0])
+                matrix = (
+                    Q_augmented(self.params, self.gps, args[0])
+                    if self.augmented and self.gps is not None
+                    else Q_process(self.params, args[0])
+                )
             elif kind == "R_pose":
                 matrix = np.diag([args[0] ** 2, args[0] ** 2, args[1] ** 2])
             elif kind == "R_gps":
@@ -170,15 +268,18 @@ class PoseFilter:
         return matrix
 
     def _reset_interval(self) -> None:
-        self._x = [float(v) for v in self.ekf.x]
+        self._x = [float(v) for v in self.ekf.x[:3]]
         self._f02 = 0.0  # chained Jacobian: [[1, 0, f02], [0, 1, f12], [0, 0, 1]]
         self._f12 = 0.0
         self._elapsed_s = 0.0
 
     @property
     def x(self) -> FloatArray:
-        """The current estimate ``[x, y, θ]`` (dead-reckoned since the last update)."""
-        return np.array(self._x)
+        """The current estimate, dead-reckoned since the last update.
+
+        ``[x, y, θ]``, then the augmented states (bias, wander) as of the last update.
+        """
+        return np.concatenate([self._x, self.ekf.x[3:]])
 
     @property
     def P(self) -> FloatArray:  # noqa: N802 (filterpy's names)
@@ -228,7 +329,8 @@ class PoseFilter:
         gps_xy_m : (float, float) or None
             GPS position, local frame [m].
         gps_sigma_m : float
-            Its per-axis standard deviation [m].
+            Its per-axis standard deviation [m]: the white part only when the filter is
+            augmented (the wander is a state).
         heading_rad : float or None
             Compass heading, clockwise from true north [rad].
         heading_sigma_rad : float
@@ -236,21 +338,51 @@ class PoseFilter:
         """
         ekf = self.ekf
         if self._elapsed_s > 0.0:
-            ekf.F = np.array([[1.0, 0.0, self._f02], [0.0, 1.0, self._f12], [0.0, 0.0, 1.0]])
+            F = np.eye(ekf.dim_x)
+            F[0, 2] = self._f02
+            F[1, 2] = self._f12
+            x_pred = np.array(ekf.x, dtype=float)
+            x_pred[:3] = self._x
+            if self.augmented and self.gps is not None:
+                phi = math.exp(-self._elapsed_s / self.gps.correlation_time_s)
+                F[4, 4] = F[5, 5] = phi
+                x_pred[4:6] *= phi
+            ekf.F = F
             ekf.Q = self._cached("Q", round(self._elapsed_s, 9))
-            ekf.x_dead_reckoned = np.array(self._x)
+            ekf.x_dead_reckoned = x_pred
             ekf.predict()
+        six = self.augmented
         if gps_xy_m is not None and heading_rad is not None:
             z = np.array([gps_xy_m[0], gps_xy_m[1], heading_rad])
             R = self._cached("R_pose", gps_sigma_m, heading_sigma_rad)
-            ekf.update(z, H_pose, hx_pose, R=R, residual=residual_pose)
+            ekf.update(
+                z,
+                H_pose6 if six else H_pose,
+                hx_pose6 if six else hx_pose,
+                R=R,
+                residual=residual_pose,
+            )
         elif gps_xy_m is not None:
             R = self._cached("R_gps", gps_sigma_m)
-            ekf.update(np.array(gps_xy_m, dtype=float), H_gps, hx_gps, R=R)
+            ekf.update(
+                np.array(gps_xy_m, dtype=float),
+                H_gps6 if six else H_gps,
+                hx_gps6 if six else hx_gps,
+                R=R,
+            )
         elif heading_rad is not None:
             R = self._cached("R_compass", heading_sigma_rad)
             ekf.update(
-                np.array([heading_rad]), H_compass, hx_compass, R=R, residual=residual_heading
+                np.array([heading_rad]),
+                H_compass6 if six else H_compass,
+                hx_compass6 if six else hx_compass,
+                R=R,
+                residual=residual_heading,
             )
+        if gps_xy_m is not None or heading_rad is not None:
+            y = np.atleast_1d(np.asarray(ekf.y, dtype=float))
+            S = np.atleast_2d(np.asarray(ekf.S, dtype=float))
+            self.nis = float(y @ np.linalg.solve(S, y))
+            self.nis_dof = len(y)
         ekf.x[2] = ekf.x[2] % (2.0 * math.pi)
         self._reset_interval()

@@ -2,26 +2,27 @@
 
 :func:`score_track` takes timestamps and WGS84 positions (nothing simulation-specific) and
 returns :class:`TrackMetrics`: whether the route was completed, its time and distance, the
-cross-track error on the tillage lines (max, RMS, 95th percentile, and the stretches where it
-exceeded a threshold), each waypoint's closest approach (the paper's "waypoint error", 2.61 m
-at most in its field trial), and the coverage ratio of the track's footprint.
-
-Everything is vectorised (numpy, scipy's cKDTree, a raster for the footprint), so that a day's
-10 Hz log (hundreds of thousands of fixes) scores in a fraction of a second.
+cross-track error to the line being driven (on tillage lines and on turns separately, with the
+stretches over a threshold), each waypoint's closest approach, and the coverage ratio of the
+track's implement footprint. The simulator adds what only it knows (the filter's errors and
+consistency, the waypoint error as the filter saw it).
 
 How the figures are defined
 ---------------------------
-- A fix is *on a tillage line* when the nearest piece of the plan is a tillage line and the
-  fix projects inside that line (not past its ends, where the tractor is turning). Its
-  cross-track error is its distance to that line. A fix more than ``interval_m / 2`` off its
-  line is nearer the neighbouring line and is measured against that one, as any track-to-plan
-  matcher must without knowing the tractor's intent.
-- A waypoint's error is its distance to the nearest point of the track polyline.
-- The footprint is the track swept by the implement, ``interval_m`` wide. It is computed on a
-  raster (cells of at most ``interval_m / 8``, finer for small fields) as every cell whose
-  centre lies within ``interval_m / 2`` of the track: the same as buffering the track with
-  round joins, except at the track's two very ends (round here, flat in a buffer with flat
-  caps), which usually lie outside the field at the start and finish points.
+- Every position is first matched to the piece of the route being driven
+  (:mod:`navigation.route`): the simulator passes the waypoint it steered to; a recorded track
+  is matched in route order. The cross-track error is the distance to that piece, so a tractor
+  that strays onto the neighbouring line has an error of about one interval there, not zero.
+- A position is *on a tillage line* when its piece is a tillage line and it projects inside it
+  (not past its ends). *On a turn* likewise for turn pieces.
+- A waypoint's error is its distance to the nearest point of the track polyline. With
+  ``live=True`` only the waypoints the track has reached (matched in route order) have one;
+  the others are None, and ``coverage_of_driven_ratio`` compares the footprint with what the
+  plan's driven part would till.
+- Coverage: :mod:`navigation.coverage`, with the implement width.
+
+Everything is vectorised, so a day's 10 Hz log (hundreds of thousands of fixes) scores in
+about a second.
 """
 
 from __future__ import annotations
@@ -32,22 +33,35 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import shapely
-from scipy import ndimage  # type: ignore[import-untyped]
 from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
+from navigation.coverage import coverage_ratio, implement_width_m
+from navigation.coverage import polygon_mask as _polygon_mask
+from navigation.route import (
+    LINE,
+    TURN,
+    Route,
+    build_route,
+    match_by_leg,
+    match_monotone,
+    point_segment,
+)
 from navigation.types import NavigationError
-from planner.projection import LocalFrame, field_frame
+from planner.projection import LocalFrame
 from planner.types import CoveragePlan
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
-#: Raster cells for the footprint: aimed at, and never more than (memory and time).
-TARGET_RASTER_CELLS = 250_000
-MAX_RASTER_CELLS = 4_000_000
-#: Cells are at most this fraction of the interval.
-RASTER_CELLS_PER_INTERVAL = 8
+__all__ = [
+    "Stretch",
+    "TrackMetrics",
+    "coverage_ratio",
+    "cross_track_errors",
+    "score_track",
+    "waypoint_errors",
+    "_polygon_mask",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,13 +104,25 @@ class TrackMetrics:
     on_line_share : float
         Share of fixes on tillage lines.
     cross_track_max_m, cross_track_rms_m, cross_track_p95_m : float or None
-        Cross-track error on tillage lines [m]; None if no fix was on a line.
-    waypoint_error_max_m, waypoint_error_mean_m : float
-        Closest approach of the track to each waypoint: largest and mean [m].
-    waypoint_errors_m : tuple of float
-        Closest approach per waypoint, in route order [m].
+        Distance to the tillage line being driven [m]; None if no fix was on a line.
+    turn_cross_track_max_m, turn_cross_track_rms_m : float or None
+        Distance to the turn being driven, for fixes on turns [m].
+    waypoint_error_max_m, waypoint_error_mean_m : float or None
+        Closest approach of the track to each (reached) waypoint: largest and mean [m].
+    line_waypoint_error_max_m : float or None
+        The same, largest over the line ends only (the paper's 8-waypoint block).
+    waypoint_errors_m : tuple of (float or None)
+        Closest approach per waypoint, in route order [m]; None where not reached (live).
+    waypoints_reached : int
+        Waypoints the track has reached in route order.
+    plan_progress : float
+        Share of the route's length up to the piece the track reached last.
     coverage_ratio : float
-        Field area inside the track's footprint over field area.
+        Field area inside the track's implement footprint over field area.
+    coverage_of_driven_ratio : float or None
+        Live runs: the footprint over what the plan's driven part would till.
+    implement_width_m : float
+        Width of the footprint [m].
     threshold_m : float
         Cross-track error above which a stretch is reported [m].
     stretches : tuple of Stretch
@@ -104,6 +130,24 @@ class TrackMetrics:
     filter_rms_m, gps_rms_m : float or None
         Simulation only: RMS distance of the filter's estimate and of the raw GPS fixes from
         the true position [m].
+    waypoint_error_estimate_max_m, waypoint_error_estimate_mean_m : float or None
+        Simulation only: the paper's measure — distance from the filter's estimate to the
+        waypoint at the moment the tractor switched to the next one [m].
+    line_waypoint_error_estimate_max_m : float or None
+        The same, largest over the line ends [m].
+    waypoint_errors_estimate_m : tuple of (float or None) or None
+        Per waypoint [m].
+    nees_mean, nis_mean : float or None
+        Simulation only: mean normalised estimation error squared of the position (2 degrees
+        of freedom) and mean normalised innovation squared of the GPS/compass updates.
+    nees_dof, nis_dof : int or None
+        Their degrees of freedom.
+    nees_bounds_95, nis_bounds_95 : tuple of float or None
+        Two-sided 95 % χ² bounds of the means (:mod:`navigation.consistency`).
+    nees_within_bounds, nis_within_bounds : bool or None
+        Whether the mean lies within its bounds.
+    compass_bias_estimate_deg, compass_bias_true_deg : float or None
+        Simulation only: the filter's final compass-bias estimate and the simulated bias [deg].
     """
 
     completed: bool
@@ -114,164 +158,69 @@ class TrackMetrics:
     cross_track_max_m: float | None
     cross_track_rms_m: float | None
     cross_track_p95_m: float | None
-    waypoint_error_max_m: float
-    waypoint_error_mean_m: float
-    waypoint_errors_m: tuple[float, ...]
+    turn_cross_track_max_m: float | None
+    turn_cross_track_rms_m: float | None
+    waypoint_error_max_m: float | None
+    waypoint_error_mean_m: float | None
+    line_waypoint_error_max_m: float | None
+    waypoint_errors_m: tuple[float | None, ...]
+    waypoints_reached: int
+    plan_progress: float
     coverage_ratio: float
+    coverage_of_driven_ratio: float | None
+    implement_width_m: float
     threshold_m: float
     stretches: tuple[Stretch, ...]
     filter_rms_m: float | None = None
     gps_rms_m: float | None = None
+    waypoint_error_estimate_max_m: float | None = None
+    waypoint_error_estimate_mean_m: float | None = None
+    line_waypoint_error_estimate_max_m: float | None = None
+    waypoint_errors_estimate_m: tuple[float | None, ...] | None = None
+    nees_mean: float | None = None
+    nees_dof: int | None = None
+    nees_bounds_95: tuple[float, float] | None = None
+    nees_within_bounds: bool | None = None
+    nis_mean: float | None = None
+    nis_dof: int | None = None
+    nis_bounds_95: tuple[float, float] | None = None
+    nis_within_bounds: bool | None = None
+    compass_bias_estimate_deg: float | None = None
+    compass_bias_true_deg: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """Return the metrics as plain JSON-ready values, stretches as dicts."""
         return asdict(self)
 
 
-@dataclass(frozen=True, slots=True)
-class PlanPieces:
-    """The plan cut into straight pieces in a local frame, for matching fixes.
-
-    Attributes
-    ----------
-    frame : LocalFrame
-        The field's frame.
-    ax, ay, bx, by : arrays
-        Piece ends [m].
-    is_line : bool array
-        The piece belongs to a tillage line.
-    line : int array
-        Tillage line index, -1 for other pieces.
-    spacing_m : float
-        Distance between neighbouring tillage lines (the plan's interval) [m].
-    """
-
-    frame: LocalFrame
-    ax: FloatArray
-    ay: FloatArray
-    bx: FloatArray
-    by: FloatArray
-    is_line: npt.NDArray[np.bool_]
-    line: IntArray
-    spacing_m: float
-
-
-def plan_pieces(plan: CoveragePlan, frame: LocalFrame | None = None) -> PlanPieces:
-    """Cut ``plan``'s segments (or, if it has none, its waypoint legs) into straight pieces.
-
-    Without segments, a leg is a tillage line when it runs from a ``line_start`` to a
-    ``line_end`` waypoint of the same line.
-    """
-    frame = frame or field_frame(plan.field_lonlat)
-    polylines: list[tuple[list[tuple[float, float]], int]] = []
-    if plan.segments:
-        for seg in plan.segments:
-            line = seg.index if seg.kind == "line" and seg.index is not None else -1
-            polylines.append((list(seg.lonlat), line))
-    else:
-        wps = plan.waypoints
-        for a, b in zip(wps[:-1], wps[1:], strict=True):
-            is_line = (
-                a.role == "line_start"
-                and b.role == "line_end"
-                and a.line is not None
-                and a.line == b.line
-            )
-            line = a.line if is_line and a.line is not None else -1
-            polylines.append(([(a.lon, a.lat), (b.lon, b.lat)], line))
-    pieces: list[tuple[float, float, float, float, int]] = []
-    for coords, line in polylines:
-        if len(coords) < 2:
-            continue
-        lon, lat = zip(*coords, strict=True)
-        x, y = frame.to_local_xy(lon, lat)
-        for i in range(len(x) - 1):
-            if x[i] != x[i + 1] or y[i] != y[i + 1]:
-                pieces.append((x[i], y[i], x[i + 1], y[i + 1], line))
-    if not pieces:
-        raise NavigationError("plan", "has no path to follow (fewer than two distinct points)")
-    arr = np.array(pieces, dtype=float)
-    line_idx = arr[:, 4].astype(np.int64)
-    return PlanPieces(
-        frame=frame,
-        ax=arr[:, 0],
-        ay=arr[:, 1],
-        bx=arr[:, 2],
-        by=arr[:, 3],
-        is_line=line_idx >= 0,
-        line=line_idx,
-        spacing_m=float(plan.interval_m),
-    )
-
-
-def _point_segment(
-    px: FloatArray, py: FloatArray, ax: FloatArray, ay: FloatArray, bx: FloatArray, by: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Distance from points to segments (broadcast) and the unclamped projection parameter."""
-    dx = bx - ax
-    dy = by - ay
-    len2 = np.maximum(dx * dx + dy * dy, 1e-18)
-    t = ((px - ax) * dx + (py - ay) * dy) / len2
-    tc = np.clip(t, 0.0, 1.0)
-    return np.hypot(px - (ax + tc * dx), py - (ay + tc * dy)), t
-
-
-#: Fixes whose nearest tillage line is looked for at once (bounds the memory of a long log).
-_XTE_BLOCK = 50_000
-
-
 def cross_track_errors(
-    pieces: PlanPieces, x_m: FloatArray, y_m: FloatArray
-) -> tuple[FloatArray, IntArray]:
-    """Cross-track error of each position on the tillage lines [m] and its line index.
+    route: Route, x_m: FloatArray, y_m: FloatArray, piece: IntArray
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """Cross-track error of each position to its matched piece.
 
     Returns
     -------
-    error_m : array
-        Distance to the tillage line, NaN where the position is not on a tillage line.
+    line_error_m : array
+        Distance to the tillage line driven, NaN where the position is not on a line.
+    turn_error_m : array
+        Distance to the turn driven, NaN where not on a turn.
     line : int array
-        That line's index, -1 where not on a line.
+        The tillage line's index, -1 where not on a line.
     """
-    n_pieces = len(pieces.ax)
-    lengths = np.hypot(pieces.bx - pieces.ax, pieces.by - pieces.ay)
-    # Sample the pieces every ``spacing`` metres; the pieces owning the nearest samples are
-    # the candidates, whose exact distances are then compared. The spacing is a quarter of
-    # the typical distance between pieces, so the nearest piece is always among them.
-    spacing = max(pieces.spacing_m / 4.0, float(lengths.sum()) / 400_000.0)
-    counts = np.maximum(np.ceil(lengths / spacing).astype(np.int64), 1) + 1
-    owner = np.repeat(np.arange(n_pieces), counts)
-    starts = np.cumsum(counts) - counts
-    frac = (np.arange(owner.size) - starts[owner]) / (counts[owner] - 1)
-    sx = pieces.ax[owner] + frac * (pieces.bx - pieces.ax)[owner]
-    sy = pieces.ay[owner] + frac * (pieces.by - pieces.ay)[owner]
-    k = int(min(6, owner.size))
-    tree = cKDTree(np.column_stack([sx, sy]))
-    piece = np.empty(len(x_m), dtype=np.int64)
-    d = np.empty(len(x_m))
-    tb = np.empty(len(x_m))
-    # In blocks of fixes, so that the candidates' arrays (k per fix) stay small for a long log.
-    for lo in range(0, len(x_m), _XTE_BLOCK):
-        hi = min(lo + _XTE_BLOCK, len(x_m))
-        bx, by = x_m[lo:hi], y_m[lo:hi]
-        _, idx = tree.query(np.column_stack([bx, by]), k=k, workers=-1)
-        cand = owner[idx.reshape(hi - lo, k)]
-        dist, t = _point_segment(
-            bx[:, None],
-            by[:, None],
-            pieces.ax[cand],
-            pieces.ay[cand],
-            pieces.bx[cand],
-            pieces.by[cand],
-        )
-        best = np.argmin(dist, axis=1)
-        rows = np.arange(hi - lo)
-        piece[lo:hi] = cand[rows, best]
-        d[lo:hi] = dist[rows, best]
-        tb[lo:hi] = t[rows, best]
-    # Inside the line by more than a millimetre: a fix abeam a line's end is turning.
-    margin = 1e-3 / np.maximum(lengths[piece], 1e-9)
-    on_line = pieces.is_line[piece] & (tb > margin) & (tb < 1.0 - margin)
-    return np.where(on_line, d, np.nan), np.where(on_line, pieces.line[piece], -1)
+    d, t = point_segment(
+        x_m, y_m, route.ax[piece], route.ay[piece], route.bx[piece], route.by[piece]
+    )
+    # Inside the piece by more than a millimetre: a fix abeam a line's end is turning.
+    margin = 1e-3 / np.maximum(route.lengths_m[piece], 1e-9)
+    inside = (t > margin) & (t < 1.0 - margin)
+    kind = route.kind[piece]
+    on_line = inside & (kind == LINE)
+    on_turn = (kind == TURN) & (t >= 0.0) & (t <= 1.0)
+    return (
+        np.where(on_line, d, np.nan),
+        np.where(on_turn, d, np.nan),
+        np.where(on_line, route.line[piece], -1),
+    )
 
 
 def waypoint_errors(
@@ -286,80 +235,48 @@ def waypoint_errors(
     idx = np.asarray(idx).reshape(len(wx), k)
     # The segments on either side of each of the k nearest vertices.
     seg = np.concatenate([np.clip(idx - 1, 0, len(x_m) - 2), np.clip(idx, 0, len(x_m) - 2)], 1)
-    dist, _ = _point_segment(
+    dist, _ = point_segment(
         wx[:, None], wy[:, None], x_m[seg], y_m[seg], x_m[seg + 1], y_m[seg + 1]
     )
     return np.asarray(dist.min(axis=1))
 
 
-def coverage_ratio(
-    frame: LocalFrame, plan: CoveragePlan, x_m: FloatArray, y_m: FloatArray
-) -> float:
-    """Share of the field within ``interval_m / 2`` of the track (raster, see module doc)."""
-    field = frame.to_local(plan.field_lonlat)
-    half = 0.5 * plan.interval_m
-    min_x, min_y, max_x, max_y = field.bounds
-    min_x -= half
-    min_y -= half
-    max_x += half
-    max_y += half
-    area = (max_x - min_x) * (max_y - min_y)
-    cell = min(
-        plan.interval_m / RASTER_CELLS_PER_INTERVAL,
-        max(math.sqrt(area / TARGET_RASTER_CELLS), 0.005),
+def line_waypoints(plan: CoveragePlan) -> npt.NDArray[np.bool_]:
+    """Which waypoints are line ends (``line_start``/``line_end``)."""
+    return np.array([w.role in ("line_start", "line_end") for w in plan.waypoints], dtype=bool)
+
+
+def _max_mean(values: FloatArray) -> tuple[float | None, float | None]:
+    finite = values[np.isfinite(values)]
+    if not len(finite):
+        return None, None
+    return float(finite.max()), float(finite.mean())
+
+
+def optional_tuple(values: FloatArray) -> tuple[float | None, ...]:
+    """Floats, None where NaN."""
+    return tuple(float(v) if math.isfinite(v) else None for v in values)
+
+
+def _route_polyline_upto(
+    route: Route, piece: int, x: float, y: float
+) -> tuple[FloatArray, FloatArray]:
+    """Return the route from its start to the projection of ``(x, y)`` on ``piece``."""
+    d, t = point_segment(
+        np.array([x]),
+        np.array([y]),
+        route.ax[piece : piece + 1],
+        route.ay[piece : piece + 1],
+        route.bx[piece : piece + 1],
+        route.by[piece : piece + 1],
     )
-    cell = max(cell, math.sqrt(area / MAX_RASTER_CELLS))
-    nx = int(math.ceil((max_x - min_x) / cell))
-    ny = int(math.ceil((max_y - min_y) / cell))
-    in_field = _polygon_mask(field, min_x, min_y, cell, nx, ny)
-    n_field = int(in_field.sum())
-    if n_field == 0:
-        return 0.0
-    # Densify the track to half a cell, then mark the cells it passes through.
-    steps = np.hypot(np.diff(x_m), np.diff(y_m))
-    s = np.concatenate([[0.0], np.cumsum(steps)])
-    samples = np.linspace(0.0, s[-1], max(int(s[-1] / (0.5 * cell)) + 2, len(x_m)))
-    px = np.interp(samples, s, x_m) if s[-1] > 0 else x_m
-    py = np.interp(samples, s, y_m) if s[-1] > 0 else y_m
-    ix = np.floor((px - min_x) / cell).astype(np.int64)
-    iy = np.floor((py - min_y) / cell).astype(np.int64)
-    keep = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
-    if not keep.any():
-        return 0.0
-    free = np.ones((ny, nx), dtype=bool)
-    free[iy[keep], ix[keep]] = False
-    dist = ndimage.distance_transform_edt(free, sampling=cell)
-    covered = dist <= half
-    return float((covered & in_field).sum() / n_field)
-
-
-def _polygon_mask(
-    polygon: shapely.Polygon, min_x: float, min_y: float, cell: float, nx: int, ny: int
-) -> npt.NDArray[np.bool_]:
-    """Cells of an ``ny × nx`` grid whose centres lie inside ``polygon`` (scanline, even-odd).
-
-    Each row's centre line crosses the polygon's edges (holes included) at sorted x; the
-    centres between the first and second crossing, the third and fourth, … are inside.
-    """
-    rings = [polygon.exterior, *polygon.interiors]
-    coords = [np.asarray(r.coords) for r in rings]
-    x1 = np.concatenate([c[:-1, 0] for c in coords])
-    y1 = np.concatenate([c[:-1, 1] for c in coords])
-    x2 = np.concatenate([c[1:, 0] for c in coords])
-    y2 = np.concatenate([c[1:, 1] for c in coords])
-    cy = min_y + (np.arange(ny) + 0.5) * cell
-    row_idx, edge_idx = np.nonzero((y1[None, :] <= cy[:, None]) != (y2[None, :] <= cy[:, None]))
-    yr = cy[row_idx]
-    xe1, ye1, xe2, ye2 = x1[edge_idx], y1[edge_idx], x2[edge_idx], y2[edge_idx]
-    xc = xe1 + (yr - ye1) * (xe2 - xe1) / (ye2 - ye1)
-    order = np.lexsort((xc, row_idx))
-    rows = row_idx[order]
-    # First column whose centre is right of the crossing.
-    cols = np.clip(np.ceil((xc[order] - min_x) / cell - 0.5), 0, nx).astype(np.int64)
-    diff = np.zeros((ny, nx + 1), dtype=np.int32)
-    sign = np.where(np.arange(len(rows)) % 2 == 0, 1, -1)
-    np.add.at(diff, (rows, cols), sign)
-    return np.cumsum(diff[:, :nx], axis=1) > 0
+    tc = float(np.clip(t[0], 0.0, 1.0))
+    end_x = route.ax[piece] + tc * (route.bx[piece] - route.ax[piece])
+    end_y = route.ay[piece] + tc * (route.by[piece] - route.ay[piece])
+    return (
+        np.append(route.ax[: piece + 1], end_x),
+        np.append(route.ay[: piece + 1], end_y),
+    )
 
 
 def score_track(
@@ -371,6 +288,8 @@ def score_track(
     threshold_m: float = 1.0,
     completion_radius_m: float = 5.0,
     completed: bool | None = None,
+    leg: npt.ArrayLike | None = None,
+    live: bool = False,
 ) -> TrackMetrics:
     """Score a track (any source) against ``plan``.
 
@@ -389,6 +308,12 @@ def score_track(
         waypoint and ends this close to the last one [m].
     completed : bool or None
         Known completion (the simulator knows); None to judge from the geometry.
+    leg : array of int or None
+        For each fix, the waypoint being steered to (the simulator knows); None to infer the
+        piece being driven from the track (:func:`navigation.route.match_monotone`).
+    live : bool
+        The run is still going: waypoints not yet reached get no error, and the coverage of
+        the driven part of the plan is reported.
 
     Returns
     -------
@@ -418,31 +343,59 @@ def score_track(
     if not plan.waypoints:
         raise NavigationError("plan", "has no waypoints")
 
-    pieces = plan_pieces(plan)
-    frame = pieces.frame
+    route = build_route(plan)
+    frame = route.frame
     x, y = frame.to_local_xy(lon_a, lat_a)
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
 
-    xte, line = cross_track_errors(pieces, x, y)
+    if leg is not None:
+        legs = np.asarray(leg, dtype=np.int64).ravel()
+        if len(legs) != len(x):
+            raise NavigationError("leg", f"has {len(legs)} entries for {len(x)} fixes")
+        piece = match_by_leg(route, x, y, legs)
+    else:
+        piece = match_monotone(route, x, y)
+    xte, turn_err, line = cross_track_errors(route, x, y, piece)
     on = ~np.isnan(xte)
-    xte_max: float | None = None
-    xte_rms: float | None = None
-    xte_p95: float | None = None
+    xte_max = xte_rms = xte_p95 = None
     if on.any():
         err = xte[on]
         xte_max = float(err.max())
         xte_rms = float(np.sqrt(np.mean(err**2)))
         xte_p95 = float(np.percentile(err, 95))
+    on_turn = ~np.isnan(turn_err)
+    turn_max = turn_rms = None
+    if on_turn.any():
+        turn_max = float(turn_err[on_turn].max())
+        turn_rms = float(np.sqrt(np.mean(turn_err[on_turn] ** 2)))
 
+    # Progress: the furthest piece driven. A waypoint is reached once the track has been
+    # matched to a piece that starts at or after it.
+    furthest = int(piece.max())
     wp_err = waypoint_errors(frame, plan, x, y)
     if completed is None:
         end_gap = math.hypot(
-            *np.subtract(
-                frame.to_local_xy(plan.waypoints[-1].lon, plan.waypoints[-1].lat), (x[-1], y[-1])
-            )
+            float(route.waypoint_x[-1] - x[-1]), float(route.waypoint_y[-1] - y[-1])
         )
         completed = bool(wp_err.max() <= completion_radius_m and end_gap <= completion_radius_m)
+    reached = route.waypoint_piece <= furthest
+    # The waypoint that ends the piece driven last counts once the track came near it.
+    ahead = route.waypoint_piece == furthest + 1
+    reached |= ahead & (wp_err <= completion_radius_m)
+    if completed:
+        reached[:] = True
+    if live:
+        wp_err = np.where(reached, wp_err, np.nan)
+    wp_max, wp_mean = _max_mean(wp_err)
+    line_wp_max, _ = _max_mean(np.where(line_waypoints(plan), wp_err, np.nan))
+
+    lengths = route.lengths_m
+    progress = 1.0 if completed else float(lengths[: furthest + 1].sum() / lengths.sum())
+    driven = None
+    if live:
+        reference = _route_polyline_upto(route, furthest, float(x[-1]), float(y[-1]))
+        driven = coverage_ratio(frame, plan, x, y, reference=reference)
 
     return TrackMetrics(
         completed=completed,
@@ -453,10 +406,17 @@ def score_track(
         cross_track_max_m=xte_max,
         cross_track_rms_m=xte_rms,
         cross_track_p95_m=xte_p95,
-        waypoint_error_max_m=float(wp_err.max()),
-        waypoint_error_mean_m=float(wp_err.mean()),
-        waypoint_errors_m=tuple(float(v) for v in wp_err),
+        turn_cross_track_max_m=turn_max,
+        turn_cross_track_rms_m=turn_rms,
+        waypoint_error_max_m=wp_max,
+        waypoint_error_mean_m=wp_mean,
+        line_waypoint_error_max_m=line_wp_max,
+        waypoint_errors_m=optional_tuple(wp_err),
+        waypoints_reached=int(reached.sum()),
+        plan_progress=progress,
         coverage_ratio=coverage_ratio(frame, plan, x, y),
+        coverage_of_driven_ratio=driven,
+        implement_width_m=implement_width_m(plan),
         threshold_m=threshold_m,
         stretches=_stretches(t - t[0], xte, line, threshold_m),
     )

@@ -13,7 +13,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from navigation.metrics import cross_track_errors, plan_pieces
+from navigation.metrics import cross_track_errors
+from navigation.route import build_route, match_by_leg
 from navigation.simulator import SimulationLog
 
 
@@ -26,7 +27,7 @@ def plot_simulation(log: SimulationLog, *, title: str | None = None, dpi: int = 
         The PNG file's content.
     """
     frame = log.frame
-    pieces = plan_pieces(log.plan, frame)
+    pieces = build_route(log.plan, frame)
     field = frame.to_local(log.plan.field_lonlat)
 
     fig = Figure(figsize=(12, 6), dpi=dpi, layout="constrained")
@@ -76,8 +77,16 @@ def plot_simulation(log: SimulationLog, *, title: str | None = None, dpi: int = 
         fontsize=10,
     )
 
-    xte, _ = cross_track_errors(pieces, log.true_x_m, log.true_y_m)
-    xte_est, _ = cross_track_errors(pieces, log.est_x_m, log.est_y_m)
+    # Both to the line being driven (the waypoint the tractor steered to).
+    xte, _, _ = cross_track_errors(
+        pieces,
+        log.true_x_m,
+        log.true_y_m,
+        match_by_leg(pieces, log.true_x_m, log.true_y_m, log.target),
+    )
+    xte_est, _, _ = cross_track_errors(
+        pieces, log.est_x_m, log.est_y_m, match_by_leg(pieces, log.est_x_m, log.est_y_m, log.target)
+    )
     ax_err.plot(log.time_s, xte, color="#c0392b", lw=1.2, label="true track")
     ax_err.plot(
         log.time_s,

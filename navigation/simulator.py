@@ -22,9 +22,10 @@ import numpy as np
 import numpy.typing as npt
 
 from navigation.compass import compass_heading_deg, magnetic_declination_deg
-from navigation.filters import PoseFilter
+from navigation.consistency import chi2_mean_bounds
+from navigation.filters import PoseFilter, augmented_x0
 from navigation.guidance import pure_pursuit_command, segment_progress, waypoint_command
-from navigation.metrics import TrackMetrics, score_track
+from navigation.metrics import TrackMetrics, line_waypoints, optional_tuple, score_track
 from navigation.sensors import GpsReceiver, gps_params, read_compass, validate_compass
 from navigation.types import (
     GUIDANCE_MODES,
@@ -32,11 +33,20 @@ from navigation.types import (
     GpsParams,
     NavigationError,
     SimulationConfig,
+    VehicleParams,
     VehicleState,
 )
-from navigation.vehicle import TWO_PI, disturb, step, validate_vehicle, yaw_rate
+from navigation.vehicle import (
+    TWO_PI,
+    disturb,
+    step,
+    turn_geometry,
+    validate_vehicle,
+    vehicle_params_for,
+)
 from planner.projection import LocalFrame, field_frame
 from planner.types import CoveragePlan
+from planner.vehicles import resolve_vehicle
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -148,6 +158,11 @@ def _linearised_lonlat(
     return lonlat_near
 
 
+def plan_vehicle_params(plan: CoveragePlan) -> VehicleParams:
+    """Return the simulator's tractor for ``plan``: its vehicle (default ``hand_tractor``)."""
+    return vehicle_params_for(resolve_vehicle(getattr(plan, "vehicle", None)))
+
+
 def validate_config(config: SimulationConfig) -> GpsParams:
     """Check ``config``; return its GPS model.
 
@@ -156,7 +171,8 @@ def validate_config(config: SimulationConfig) -> GpsParams:
     NavigationError
         Naming the first bad setting.
     """
-    validate_vehicle(config.vehicle)
+    if config.vehicle is not None:
+        validate_vehicle(config.vehicle)
     validate_compass(config.compass)
     gps = gps_params(config.gps)
     g = config.guidance
@@ -234,7 +250,9 @@ def simulate(
         raise NavigationError(
             "plan", f"needs at least two waypoints to drive, has {len(plan.waypoints)}"
         )
-    config = dataclasses.replace(config, gps=gps_model)
+    veh = config.vehicle or plan_vehicle_params(plan)
+    validate_vehicle(veh)
+    config = dataclasses.replace(config, gps=gps_model, vehicle=veh)
     frame = field_frame(plan.field_lonlat)
     wp_lon = np.array([w.lon for w in plan.waypoints])
     wp_lat = np.array([w.lat for w in plan.waypoints])
@@ -244,7 +262,6 @@ def simulate(
         raise NavigationError("plan", "all its waypoints are at the same place")
     n_wp = len(wp_x)
 
-    veh = config.vehicle
     guid = config.guidance
     comp = config.compass
     dt_s = config.dt_s
@@ -268,16 +285,31 @@ def simulate(
     state = VehicleState(float(wp_x[0]), float(wp_y[0]), heading0 % TWO_PI, STRAIGHT)
 
     gps = GpsReceiver(gps_model, rng)
-    gps_sigma = gps_model.sigma_m
+    augmented = config.kalman.augmented
+    # The augmented filter carries the wander as a state: its fixes have the white noise only.
+    gps_sigma = max(gps_model.white_sigma_m, 1e-3) if augmented else gps_model.sigma_m
     compass_sigma = math.radians(max(comp.noise_deg, 0.1))
     fix = gps.read(state, 0.0)
     reading = read_compass(state, rng, 0.0, declination_deg=declination, params=comp)
     heading_meas = math.radians(compass_heading_deg(reading.mag_x, reading.mag_y, declination))
-    kf = PoseFilter(
-        np.array([fix.x_m, fix.y_m, heading_meas]),
-        np.diag([gps_sigma**2, gps_sigma**2, compass_sigma**2]),
-        params=config.kalman,
-    )
+    if augmented:
+        x0, p0 = augmented_x0(
+            (fix.x_m, fix.y_m),
+            heading_meas,
+            gps=dataclasses.replace(gps_model, white_sigma_m=gps_sigma),
+            heading_sigma_rad=compass_sigma,
+            params=config.kalman,
+        )
+        kf = PoseFilter(x0, p0, params=config.kalman, gps=gps_model)
+    else:
+        kf = PoseFilter(
+            np.array([fix.x_m, fix.y_m, heading_meas]),
+            np.diag([gps_sigma**2, gps_sigma**2, compass_sigma**2]),
+            params=config.kalman,
+        )
+    nees: list[float] = []
+    nis: list[float] = []
+    nis_dof: list[int] = []
     ex, ey, eh = fix.x_m, fix.y_m, heading_meas
     gps_period = 1.0 / gps_model.rate_hz
     compass_period = 1.0 / comp.rate_hz
@@ -302,9 +334,19 @@ def simulate(
     line_mode = guid.mode == "line"
     yaw_noise = veh.yaw_noise_deg_per_sqrt_s
     speed_noise = veh.speed_noise
-    omega_turn = yaw_rate(1, speed_mps=speed, track_width_m=track)
+    omega_turn, pivot = turn_geometry(veh, speed)
+    turn_speed = omega_turn * pivot
     # What the controller expects each clutch to do: (centre speed, yaw rate).
-    u_by_clutch = {-1: (0.5 * speed, -omega_turn), 0: (speed, 0.0), 1: (0.5 * speed, omega_turn)}
+    u_by_clutch = {
+        -1: (turn_speed, -omega_turn),
+        0: (speed, 0.0),
+        1: (turn_speed, omega_turn),
+    }
+    # The controller knows the commands still in the servo: it steers on the heading they
+    # will have turned the tractor to when its new command acts (a Smith predictor), or a
+    # tractor that turns at π/4 rad/s behind a 0.3 s servo would overshoot every correction.
+    yaw_step = {c: u_by_clutch[c][1] * dt_s for c in (-1, 0, 1)}
+    est_wp_err = np.full(n_wp, np.nan)
     lonlat_near = _linearised_lonlat(frame, wp_x, wp_y) if not line_mode else None
 
     log_t: list[float] = []
@@ -345,30 +387,46 @@ def simulate(
                 kf.update(gps_xy_m=(fix.x_m, fix.y_m), gps_sigma_m=gps_sigma)
             sum_sin = sum_cos = 0.0
             n_compass = 0
-            ex, ey, eh = (float(v) for v in kf.ekf.x)
+            ex, ey, eh = (float(v) for v in kf.ekf.x[:3])
+            # Consistency: the position error against the filter's own covariance.
+            err = np.array([ex - state.x_m, ey - state.y_m])
+            nees.append(float(err @ np.linalg.solve(kf.P[:2, :2], err)))
+            if kf.nis is not None:
+                nis.append(kf.nis)
+                nis_dof.append(kf.nis_dof)
 
         # Guide: advance past reached waypoints, then steer to the current one.
         clutch = STRAIGHT
+        eh_pred = (eh + sum(yaw_step[c] for c in servo)) % TWO_PI
         while True:
             ax, ay = wp_x[target - 1], wp_y[target - 1]
             bx, by = wp_x[target], wp_y[target]
             along, _, length = segment_progress(ex, ey, ax, ay, bx, by)
             if lonlat_near is None:
                 cmd = pure_pursuit_command(
-                    ex, ey, eh, ax, ay, bx, by, lookahead_m=guid.lookahead_m, tolerance_deg=tol_line
+                    ex,
+                    ey,
+                    eh_pred,
+                    ax,
+                    ay,
+                    bx,
+                    by,
+                    lookahead_m=guid.lookahead_m,
+                    tolerance_deg=tol_line,
                 )
             else:
                 lon, lat = lonlat_near(target, ex, ey)
                 cmd = waypoint_command(
                     lon,
                     lat,
-                    math.degrees(eh),
+                    math.degrees(eh_pred),
                     wp_lon[target],
                     wp_lat[target],
                     tolerance_deg=tol_wp,
                 )
             if along >= length or cmd.distance_m <= (line_radius if line_mode else radius):
                 reached[target] = t
+                est_wp_err[target] = math.hypot(ex - wp_x[target], ey - wp_y[target])
                 target += 1
                 if on_waypoint is not None:
                     on_waypoint(target, n_wp)
@@ -394,8 +452,16 @@ def simulate(
         # Act: the servo engages the clutch commanded ``delay_steps`` steps ago.
         servo.append(clutch)
         engaged = servo.popleft()
-        v = speed * (1.0 + speed_noise * rng.standard_normal()) if speed_noise else speed
-        state = step(state, engaged, dt_s, speed_mps=v, track_width_m=track)
+        slip = 1.0 + speed_noise * rng.standard_normal() if speed_noise else 1.0
+        state = step(
+            state,
+            engaged,
+            dt_s,
+            speed_mps=speed * slip,
+            track_width_m=track,
+            yaw_rate_rad_s=omega_turn * slip,
+            pivot_m=pivot,
+        )
         state = disturb(state, rng, dt_s, yaw_noise_deg_per_sqrt_s=yaw_noise)
         ex, ey, eh = kf.propagate(*u_by_clutch[engaged], dt_s)
 
@@ -409,14 +475,51 @@ def simulate(
     g_y = np.array(gps_y)
     lon_true, lat_true = frame.to_lonlat_xy(tx, ty)
     metrics = score_track(
-        plan, time_arr, lon_true, lat_true, threshold_m=threshold_m, completed=completed
+        plan,
+        time_arr,
+        lon_true,
+        lat_true,
+        threshold_m=threshold_m,
+        completed=completed,
+        leg=np.array(log_tg, dtype=np.int64),
     )
     # The true position at each fix time (fixes fall on control steps).
     fix_step = np.clip(np.rint(g_t / dt_s).astype(np.int64), 0, len(tx) - 1)
+    est_max = est_mean = line_est_max = None
+    if np.isfinite(est_wp_err).any():
+        finite = est_wp_err[np.isfinite(est_wp_err)]
+        est_max, est_mean = float(finite.max()), float(finite.mean())
+        on_lines = est_wp_err[line_waypoints(plan) & np.isfinite(est_wp_err)]
+        line_est_max = float(on_lines.max()) if len(on_lines) else None
+    nees_mean = float(np.mean(nees)) if nees else None
+    nis_mean = float(np.mean(nis)) if nis else None
+    # NEES samples of one run are correlated in time (the wander lasts a minute), so one run
+    # counts as one sample of its time average: the bounds are those of one 2-dof χ² draw.
+    # Innovations of a consistent filter are white, so every update counts for the NIS.
+    nees_bounds = chi2_mean_bounds(2, 1)
+    nis_bounds = chi2_mean_bounds(round(np.mean(nis_dof)), len(nis)) if nis else None
     metrics = dataclasses.replace(
         metrics,
         filter_rms_m=float(np.sqrt(np.mean((ex_a - tx) ** 2 + (ey_a - ty) ** 2))),
         gps_rms_m=float(np.sqrt(np.mean((g_x - tx[fix_step]) ** 2 + (g_y - ty[fix_step]) ** 2))),
+        waypoint_error_estimate_max_m=est_max,
+        waypoint_error_estimate_mean_m=est_mean,
+        line_waypoint_error_estimate_max_m=line_est_max,
+        waypoint_errors_estimate_m=optional_tuple(est_wp_err),
+        nees_mean=nees_mean,
+        nees_dof=2,
+        nees_bounds_95=nees_bounds,
+        nees_within_bounds=None
+        if nees_mean is None
+        else bool(nees_bounds[0] <= nees_mean <= nees_bounds[1]),
+        nis_mean=nis_mean,
+        nis_dof=round(np.mean(nis_dof)) if nis_dof else None,
+        nis_bounds_95=nis_bounds,
+        nis_within_bounds=None
+        if nis_mean is None or nis_bounds is None
+        else bool(nis_bounds[0] <= nis_mean <= nis_bounds[1]),
+        compass_bias_estimate_deg=math.degrees(float(kf.ekf.x[3])) if augmented else None,
+        compass_bias_true_deg=comp.bias_deg,
     )
     return SimulationLog(
         plan=plan,

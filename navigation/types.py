@@ -119,6 +119,14 @@ class VehicleParams:
         Wheel slip: relative standard deviation of the speed, per step (mud is uneven).
     yaw_noise_deg_per_sqrt_s : float
         Random walk of the heading from uneven ground [deg/√s].
+    turn_rate_dps : float or None
+        Yaw rate while a clutch is pulled [deg/s] (the plan's vehicle: the paper's Table 3
+        gives π/4 rad/s = 45°/s); None: ``speed / track`` (the free wheel at full speed).
+    min_turn_radius_m : float
+        0 for a vehicle that pivots about a stopped wheel; else the radius of the arc the
+        axle centre drives while turning [m] (the yaw rate is then ``speed / radius``).
+    preset : str or None
+        The plan vehicle's preset these figures came from, if any.
     """
 
     speed_mps: float = DEFAULT_SPEED_MPS
@@ -126,6 +134,9 @@ class VehicleParams:
     clutch_delay_s: float = 0.3
     speed_noise: float = 0.05
     yaw_noise_deg_per_sqrt_s: float = 0.5
+    turn_rate_dps: float | None = None
+    min_turn_radius_m: float = 0.0
+    preset: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -177,8 +188,16 @@ def _preset(
     )
 
 
-#: u-blox NEO-M8N: 2.5 m CEP at 5 Hz, mostly a slow wander (multipath, atmosphere) with a
-#: correlation time of tens of seconds; RTK: 2 cm CEP, mostly white.
+#: The receivers (sources and assumptions in docs/simulation.md):
+#: - ``m8n``: u-blox NEO-M8N, 2.5 m CEP (NEO-M8 data sheet UBX-15031086, GPS & GLONASS,
+#:   autonomous; the paper's Table 2), 5 Hz (a configured rate; the data sheet allows up to
+#:   10 Hz with two constellations). The error is mostly a slow wander: static tests of
+#:   single-frequency receivers show autocorrelations that bend at about a minute (Wilson,
+#:   "GPS accuracy", Garmin 12XL 20-day test; Soundy et al., Sensors 2020, 20, 6050, favour an
+#:   Ornstein–Uhlenbeck model). The 60 s and the 30 % white share are assumptions of that
+#:   order, not an M8N measurement: fit your own with ``tillpath simulate --gps-from LOG``.
+#: - ``rtk``: an RTK fix, 2 cm CEP (u-blox ZED-F9P data sheet: 0.01 m + 1 ppm CEP, i.e. a
+#:   baseline of about 10 km), 5 Hz, mostly white; its 10 s correlation is an assumption.
 GPS_PRESETS: dict[str, GpsParams] = {
     "m8n": _preset("m8n", rate_hz=5.0, cep_m=2.5, white_share=0.3, tau_s=60.0),
     "rtk": _preset("rtk", rate_hz=5.0, cep_m=0.02, white_share=0.7, tau_s=10.0),
@@ -242,13 +261,26 @@ class FilterParams:
     Attributes
     ----------
     position_sigma_m_per_sqrt_s : float
-        Random walk of the position the motion model does not explain [m/√s].
+        Random walk of the position the motion model does not explain [m/√s]: the simulated
+        wheel slip (5 % of 0.56 m/s per 0.1 s step) is 0.009 m/√s.
     heading_sigma_deg_per_sqrt_s : float
-        Random walk of the heading the motion model does not explain [deg/√s].
+        Random walk of the heading the motion model does not explain [deg/√s] (the simulated
+        ground adds 0.5°/√s, slip during pivots about as much again).
+    augmented : bool
+        Estimate the compass bias and the receiver's wander as states (the default). False
+        gives the plain ``[x, y, θ]`` filter that treats the whole GPS error as white noise
+        (kept to show how overconfident that is).
+    compass_bias_sigma_deg : float
+        Prior standard deviation of the compass bias [deg].
+    compass_bias_drift_deg_per_sqrt_s : float
+        Random walk allowed to the compass bias [deg/√s].
     """
 
-    position_sigma_m_per_sqrt_s: float = 0.05
-    heading_sigma_deg_per_sqrt_s: float = 1.5
+    position_sigma_m_per_sqrt_s: float = 0.012
+    heading_sigma_deg_per_sqrt_s: float = 1.0
+    augmented: bool = True
+    compass_bias_sigma_deg: float = 3.0
+    compass_bias_drift_deg_per_sqrt_s: float = 0.001
 
 
 @dataclass(frozen=True, slots=True)
@@ -257,7 +289,10 @@ class SimulationConfig:
 
     Attributes
     ----------
-    vehicle, compass, guidance, kalman : params
+    vehicle : VehicleParams or None
+        The tractor; None: the plan's vehicle (its track, turn rate and turning radius;
+        ``hand_tractor`` for a plan without one), at the default speed and noise.
+    compass, guidance, kalman : params
         See their classes.
     gps : str or GpsParams
         A preset name (``m8n``, ``rtk``) or a custom error model.
@@ -272,7 +307,7 @@ class SimulationConfig:
         Spread of the tractor's initial heading about the bearing to the first line [deg].
     """
 
-    vehicle: VehicleParams = field(default_factory=VehicleParams)
+    vehicle: VehicleParams | None = None
     gps: str | GpsParams = "m8n"
     compass: CompassParams = field(default_factory=CompassParams)
     guidance: GuidanceParams = field(default_factory=GuidanceParams)

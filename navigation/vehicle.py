@@ -2,9 +2,10 @@
 
 Both wheels are driven at the engine's speed ``v``. Pulling a clutch handle disengages and
 brakes that wheel: the other wheel keeps going and the tractor pivots about the stopped wheel,
-at ``v / track_width`` rad/s, its axle centre moving at ``v / 2`` on a circle of radius
-``track_width / 2``. The motion over a step is integrated exactly (a rotation about the pivot),
-so the step size does not bend the arcs.
+at ``v / track_width`` rad/s (or the vehicle's own turn rate, the paper's π/4 rad/s), its axle
+centre on a circle of radius ``track_width / 2``. A vehicle with a minimum turning radius
+``R`` instead drives an arc of radius ``R`` at ``v / R`` rad/s. The motion over a step is
+integrated exactly (a rotation about the pivot), so the step size does not bend the arcs.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import math
 import numpy as np
 
 from navigation.types import LEFT, RIGHT, STRAIGHT, NavigationError, VehicleParams, VehicleState
+from planner.types import Vehicle
 
 TWO_PI = 2.0 * math.pi
 
@@ -44,8 +46,56 @@ def yaw_rate(clutch: int, *, speed_mps: float, track_width_m: float) -> float:
     return clutch * speed_mps / track_width_m
 
 
+def turn_geometry(params: VehicleParams, speed_mps: float) -> tuple[float, float]:
+    """Yaw rate [rad/s] and pivot distance from the axle centre [m] while a clutch is pulled.
+
+    Examples
+    --------
+    >>> rate, radius = turn_geometry(VehicleParams(track_width_m=0.7, turn_rate_dps=45.0), 0.56)
+    >>> round(rate, 4), radius                    # π/4 rad/s about the braked wheel
+    (0.7854, 0.35)
+    >>> rate, radius = turn_geometry(VehicleParams(min_turn_radius_m=3.0), 0.6)
+    >>> round(rate, 6), radius                    # v / R on a 3 m arc
+    (0.2, 3.0)
+    """
+    if params.min_turn_radius_m > 0.0:
+        return speed_mps / params.min_turn_radius_m, params.min_turn_radius_m
+    if params.turn_rate_dps:
+        return math.radians(params.turn_rate_dps), 0.5 * params.track_width_m
+    return speed_mps / params.track_width_m, 0.5 * params.track_width_m
+
+
+def vehicle_params_for(vehicle: Vehicle, **overrides: float) -> VehicleParams:
+    """Return the simulator's tractor for a plan's :class:`planner.types.Vehicle`.
+
+    Its track, turn rate and minimum turning radius come from the vehicle; speed and noise
+    keep their defaults unless ``overrides`` sets them.
+
+    Examples
+    --------
+    >>> from planner.vehicles import resolve_vehicle
+    >>> p = vehicle_params_for(resolve_vehicle("hand_tractor"))
+    >>> p.track_width_m, p.turn_rate_dps, p.preset
+    (0.7, 45.0, 'hand_tractor')
+    """
+    return VehicleParams(
+        track_width_m=vehicle.track_m,
+        turn_rate_dps=vehicle.turn_rate_dps,
+        min_turn_radius_m=vehicle.min_turn_radius_m,
+        preset=vehicle.preset,
+        **overrides,
+    )
+
+
 def step(
-    state: VehicleState, clutch: int, dt_s: float, *, speed_mps: float, track_width_m: float
+    state: VehicleState,
+    clutch: int,
+    dt_s: float,
+    *,
+    speed_mps: float,
+    track_width_m: float,
+    yaw_rate_rad_s: float | None = None,
+    pivot_m: float | None = None,
 ) -> VehicleState:
     """Advance the tractor by ``dt_s`` with ``clutch`` engaged.
 
@@ -61,6 +111,11 @@ def step(
         Wheel ground speed [m/s].
     track_width_m : float
         Distance between the wheels [m].
+    yaw_rate_rad_s : float or None
+        Yaw rate while turning [rad/s]; None: ``speed_mps / track_width_m``.
+    pivot_m : float or None
+        Distance from the axle centre to the point turned about [m]; None: half the track
+        (the braked wheel).
 
     Returns
     -------
@@ -78,12 +133,14 @@ def step(
     if clutch == STRAIGHT:
         d = speed_mps * dt_s
         return VehicleState(state.x_m + d * sin_h, state.y_m + d * cos_h, state.heading_rad, 0)
-    # The braked wheel: half a track to the left (clutch -1) or right (+1) of the axle centre.
+    # The point turned about: the braked wheel, half a track to the left (clutch -1) or right
+    # (+1) of the axle centre, or the centre of the turning circle.
     # "Right" of a heading h (clockwise from north) is (cos h, -sin h) in (east, north).
-    half = 0.5 * track_width_m * clutch
+    half = (0.5 * track_width_m if pivot_m is None else pivot_m) * clutch
     px = state.x_m + half * cos_h
     py = state.y_m - half * sin_h
-    dtheta = clutch * speed_mps / track_width_m * dt_s
+    rate = speed_mps / track_width_m if yaw_rate_rad_s is None else yaw_rate_rad_s
+    dtheta = clutch * rate * dt_s
     c = math.cos(dtheta)
     s = math.sin(dtheta)
     rx = state.x_m - px
@@ -121,6 +178,16 @@ def validate_vehicle(params: VehicleParams) -> None:
         raise NavigationError("clutch_delay_s", f"must be in [0, 5] s, got {params.clutch_delay_s}")
     if not (math.isfinite(params.speed_noise) and 0.0 <= params.speed_noise < 1.0):
         raise NavigationError("speed_noise", f"must be in [0, 1), got {params.speed_noise}")
+    if params.turn_rate_dps is not None and not (
+        math.isfinite(params.turn_rate_dps) and 0.0 < params.turn_rate_dps <= 360.0
+    ):
+        raise NavigationError(
+            "turn_rate_dps", f"must be in (0, 360] °/s, got {params.turn_rate_dps}"
+        )
+    if not (math.isfinite(params.min_turn_radius_m) and 0.0 <= params.min_turn_radius_m <= 50):
+        raise NavigationError(
+            "min_turn_radius_m", f"must be in [0, 50] m, got {params.min_turn_radius_m}"
+        )
     if not (
         math.isfinite(params.yaw_noise_deg_per_sqrt_s) and params.yaw_noise_deg_per_sqrt_s >= 0
     ):
@@ -135,7 +202,9 @@ __all__ = [
     "STRAIGHT",
     "disturb",
     "step",
+    "turn_geometry",
     "validate_vehicle",
+    "vehicle_params_for",
     "wrap_angle",
     "yaw_rate",
 ]

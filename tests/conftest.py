@@ -7,6 +7,7 @@ is exact wherever on Earth they are put.
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,19 @@ import shapely
 from shapely import Polygon
 
 from planner.projection import local_frame
+
+
+@pytest.fixture(scope="session")
+def dask_scheduler() -> Iterator[str]:
+    """The address of a small real Dask cluster (one worker process) for the whole session."""
+    from app.jobs.engine import start_local_cluster
+
+    cluster = start_local_cluster(1)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        cluster.close()
+
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = ROOT.parent / "shared"

@@ -99,7 +99,14 @@ def register(cli: typer.Typer) -> None:
             Path | None, typer.Option(help="Private key (PEM) of --certfile.")
         ] = None,
     ) -> None:
-        """Migrate the database, then serve the map page and the API (uvicorn)."""
+        """Migrate the database, then serve the map page and the API (uvicorn).
+
+        Background jobs run on a local Dask cluster started with the server (one worker
+        process per core; TILLPATH_DASK_WORKERS), or on the cluster TILLPATH_DASK_SCHEDULER
+        names.
+        """
+        import os
+
         import uvicorn
 
         from app.budget import warm_up
@@ -107,6 +114,8 @@ def register(cli: typer.Typer) -> None:
         from app.settings import get_settings
 
         check_tls_files(certfile, keyfile)
+        from app.jobs.engine import start_local_cluster
+
         shown = upgrade()
         scheme = "https" if certfile else "http"
         typer.echo(f"database {shown} is up to date; serving on {scheme}://{host}:{port}", err=True)
@@ -122,15 +131,25 @@ def register(cli: typer.Typer) -> None:
                 err=True,
             )
         warm_up()
-        uvicorn.run(
-            "app.main:create_app",
-            factory=True,
-            host=host,
-            port=port,
-            workers=workers,
-            access_log=access_log,
-            proxy_headers=True,
-            ssl_certfile=str(certfile) if certfile else None,
-            ssl_keyfile=str(keyfile) if keyfile else None,
-            **uvicorn_options(get_settings()),
-        )
+        cluster = None
+        settings = get_settings()
+        if workers > 1 and settings.dask_scheduler is None:
+            # Several web processes share one local cluster, started (and stopped) here.
+            cluster = start_local_cluster(settings.dask_workers or os.cpu_count() or 1)
+            os.environ["TILLPATH_DASK_SCHEDULER"] = cluster.scheduler_address
+        try:
+            uvicorn.run(
+                "app.main:create_app",
+                factory=True,
+                host=host,
+                port=port,
+                workers=workers,
+                access_log=access_log,
+                proxy_headers=True,
+                ssl_certfile=str(certfile) if certfile else None,
+                ssl_keyfile=str(keyfile) if keyfile else None,
+                **uvicorn_options(settings),
+            )
+        finally:
+            if cluster is not None:
+                cluster.close()

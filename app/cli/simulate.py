@@ -39,12 +39,21 @@ SUMMARY_METRICS = (
     "cross_track_max_m",
     "cross_track_rms_m",
     "cross_track_p95_m",
+    "turn_cross_track_max_m",
+    "turn_cross_track_rms_m",
     "waypoint_error_max_m",
     "waypoint_error_mean_m",
+    "line_waypoint_error_max_m",
+    "waypoint_error_estimate_max_m",
+    "waypoint_error_estimate_mean_m",
+    "line_waypoint_error_estimate_max_m",
     "coverage_ratio",
     "on_line_share",
     "filter_rms_m",
     "gps_rms_m",
+    "nees_mean",
+    "nis_mean",
+    "compass_bias_estimate_deg",
     "stretch_count",
 )
 MAX_RUNS = 10_000
@@ -95,12 +104,23 @@ def _value(metrics: dict[str, Any], name: str) -> float | None:
 
 
 def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """Summarise each metric over runs: median and spread (5th/95th percentile, min, max)."""
+    """Summarise each metric over runs: median and spread (5th/95th percentile, min, max).
+
+    The filter's consistency over the batch comes first: the mean over runs of each run's
+    mean NEES (and NIS) with its 95 % χ² bounds (:mod:`navigation.consistency`).
+    """
     import numpy as np
+
+    from navigation.consistency import batch_consistency
 
     out: dict[str, Any] = {
         "completed_share": sum(1 for r in runs if r["completed"]) / len(runs),
     }
+    for stat in ("nees", "nis"):
+        means = [r[f"{stat}_mean"] for r in runs if r.get(f"{stat}_mean") is not None]
+        dofs = [r[f"{stat}_dof"] for r in runs if r.get(f"{stat}_dof")]
+        if means and dofs:
+            out[f"{stat}_consistency"] = batch_consistency(means, dof=int(np.median(dofs)))
     for name in SUMMARY_METRICS:
         values = [v for r in runs if (v := _value(r, name)) is not None]
         if not values:
@@ -163,6 +183,23 @@ def simulate_command(
         float | None,
         typer.Option("--interval", help="Line interval in metres, for a FIELD without interval_m."),
     ] = None,
+    gps_from: Annotated[
+        Path | None,
+        typer.Option(
+            "--gps-from",
+            metavar="LOG",
+            help="Fit the GPS model (CEP, correlation time, rate) from a static log "
+            "(GPX, CSV or NMEA of a receiver standing still) instead of --gps.",
+        ),
+    ] = None,
+    date: Annotated[
+        str | None,
+        typer.Option(
+            "--date",
+            metavar="YYYY-MM-DD",
+            help="Date of the run, for the magnetic declination (2020–2029); default today.",
+        ),
+    ] = None,
 ) -> None:
     """Simulate the tractor driving FIELD|PLAN; print the metrics as JSON."""
     import numpy as np
@@ -187,10 +224,19 @@ def simulate_command(
     if plot is not None and plot.suffix.lower() != ".png":
         fail(f"--plot: the plot is a PNG; name the file *.png, got {plot.name!r}")
     plan, name = load_plan(source, interval=interval)
+    run_date = dt.datetime.now(dt.UTC).date()
+    if date is not None:
+        try:
+            run_date = dt.date.fromisoformat(date)
+        except ValueError:
+            fail(f"--date: expected YYYY-MM-DD, got {date!r}")
+    gps_model: Any = gps
+    if gps_from is not None:
+        gps_model = fit_static_log(gps_from)
     config = SimulationConfig(
-        gps=gps,
+        gps=gps_model,
         guidance=GuidanceParams(mode=guidance),
-        date=dt.datetime.now(dt.UTC).date(),
+        date=run_date,
     )
     seeds = list(range(seed, seed + runs))
     logs: dict[int, SimulationLog] = {}
@@ -226,7 +272,8 @@ def simulate_command(
 
     scenario = {
         "name": name,
-        "gps": gps,
+        "gps": gps if gps_from is None else _gps_dict(gps_model),
+        "vehicle": getattr(logs[seed].config.vehicle, "preset", None),
         "guidance": guidance,
         "interval_m": plan.interval_m,
         "waypoints": len(plan.waypoints),
@@ -275,6 +322,45 @@ def simulate_command(
                 simulation_to_gpx(log, name=f"{name} simulation seed {shown_seed}").encode(),
                 option="--gpx",
             )
+
+
+def fit_static_log(path: Path) -> Any:
+    """Read a static log (any track format) and fit the GPS model to it (``--gps-from``)."""
+    import numpy as np
+
+    from app.tracks import TrackFormatError, parse_track
+    from navigation import NavigationError
+    from navigation.gps_fit import fit_gps_params
+    from planner.projection import local_frame
+
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        fail(f"--gps-from: cannot read {path}: {exc.strerror or exc}")
+    try:
+        track = parse_track(data)
+    except TrackFormatError as exc:
+        fail(f"--gps-from: {exc}")
+    lon = np.array([f.lon for f in track.fixes])
+    lat = np.array([f.lat for f in track.fixes])
+    t = np.array([f.t for f in track.fixes], dtype=float) / 1e6
+    frame = local_frame(float(np.mean(lon)), float(np.mean(lat)))
+    x, y = frame.to_local_xy(lon, lat)
+    try:
+        return fit_gps_params(t - t[0], x, y, name=f"fitted:{path.name}")
+    except NavigationError as exc:
+        fail(f"--gps-from: {exc}")
+
+
+def _gps_dict(model: Any) -> dict[str, Any]:
+    return {
+        "name": model.name,
+        "cep_m": round(model.cep_m, 4),
+        "rate_hz": round(model.rate_hz, 3),
+        "correlated_sigma_m": round(model.correlated_sigma_m, 4),
+        "correlation_time_s": round(model.correlation_time_s, 2),
+        "white_sigma_m": round(model.white_sigma_m, 4),
+    }
 
 
 def _progress() -> Progress:

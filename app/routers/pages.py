@@ -21,12 +21,13 @@ from jinja2 import pass_context
 from starlette.routing import NoMatchFound
 
 from app import i18n
+from app.resources import resource_root
 from app.settings import Settings, get_settings
 
 logger = logging.getLogger(__name__)
 
-#: The repository root: templates, static files and node_modules live beside ``app/``.
-ROOT = Path(__file__).resolve().parents[2]
+#: Where templates, static files and node_modules are: the checkout, or the installed wheel.
+ROOT = resource_root()
 TEMPLATES_DIR = ROOT / "templates"
 STATIC_DIR = ROOT / "static"
 NODE_MODULES = ROOT / "node_modules"

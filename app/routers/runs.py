@@ -7,12 +7,12 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, File, Form, Query, Response, UploadFile, status
 
 from app import live, runs, services
-from app.auth import FixPoster, Viewer, forbidden
+from app.auth import FixPoster, Planner, Viewer, forbidden
 from app.capacity import HeavyWorkDep
 from app.db import SessionDep, end_reads
 from app.errors import UploadTooLargeError
-from app.models import PLAN_NAME_MAX_LENGTH
-from app.schemas import ErrorRead, FixesAdded, FixIn, RunList, RunRead
+from app.models import PLAN_NAME_MAX_LENGTH, Plan
+from app.schemas import ErrorRead, FixesAdded, FixIn, PlanRead, RunList, RunRead
 from app.settings import Settings, get_settings
 from app.tracks import MAX_TIME_TEXT, check_text, parse_time, read_track
 
@@ -153,6 +153,31 @@ def add_fixes(
     run = runs.read_run(session, run_id, access)
     stored, total = runs.add_fixes(session, run, fixes)
     return FixesAdded(run_id=run.id, received=len(fixes), stored=stored, fix_count=total)
+
+
+@router.post(
+    "/runs/{run_id}/follow-up",
+    response_model=PlanRead,
+    status_code=status.HTTP_201_CREATED,
+    responses={**_NOT_FOUND, **_BAD_INPUT, **_CONFLICT},
+)
+def create_follow_up(
+    run_id: int,
+    session: SessionDep,
+    access: Planner,
+    settings: SettingsDep,
+    response: Response,
+) -> Plan:
+    """Plan a path over the ground the run missed and store it as a new plan (product.md §8).
+
+    The gaps are those of `missed` in the run's answer; each is planned with the run's plan's
+    interval and options, nearest first from its start, and stored in the run's organisation
+    and field. 409 if the run missed nothing.
+    """
+    run = runs.read_run(session, run_id, access)
+    plan = runs.follow_up_plan(session, run, budget_s=settings.planning_budget_s)
+    response.headers["Location"] = f"/api/plans/{plan.id}"
+    return plan
 
 
 @router.get(

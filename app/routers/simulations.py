@@ -1,17 +1,19 @@
-"""Simulations: drive a stored plan with the simulated tractor (product.md §5, §7)."""
+"""Simulations: drive a stored plan with the simulated tractor (product.md §5, §7, §13)."""
 
 from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Response, status
+from fastapi import APIRouter, Query, Request, Response, status
 
 from app import services
 from app.auth import Planner, Viewer
-from app.capacity import HeavyWorkDep
-from app.db import SessionDep, add_row, end_reads
+from app.db import SessionDep
 from app.display import TrackDetail, display_tracks
-from app.models import Plan, Simulation
+from app.jobs import get_jobs, submit_job
+from app.jobs.schemas import JobRead
+from app.jobs.simulations import simulation_params
+from app.models import Job, Simulation, utc_now
 from app.schemas import (
     ErrorRead,
     SimulationCreate,
@@ -26,9 +28,6 @@ _BAD_INPUT: dict[int | str, dict[str, Any]] = {
 }
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorRead, "description": "No such plan or simulation"}
-}
-_BUSY: dict[int | str, dict[str, Any]] = {
-    503: {"model": ErrorRead, "description": "Server busy: retry after `Retry-After` seconds"}
 }
 #: ``?tracks=display``: only the true track, thinned for drawing (app/display.py).
 TracksQuery = Annotated[
@@ -46,30 +45,41 @@ def _answer(simulation: Simulation, tracks: TrackDetail) -> Simulation | Simulat
 
 @router.post(
     "/plans/{plan_id}/simulations",
-    response_model=SimulationRead,
-    status_code=status.HTTP_201_CREATED,
-    responses={**_BAD_INPUT, **_NOT_FOUND, **_BUSY},
+    response_model=JobRead,
+    status_code=status.HTTP_202_ACCEPTED,
+    responses={
+        **_BAD_INPUT,
+        **_NOT_FOUND,
+        503: {
+            "model": ErrorRead,
+            "description": "No job engine, or server busy: retry after `Retry-After` seconds",
+        },
+    },
 )
 def create_simulation(
     plan_id: int,
     session: SessionDep,
     access: Planner,
+    request: Request,
     response: Response,
-    heavy: HeavyWorkDep,
     body: SimulationCreate | None = None,
-    tracks: TracksQuery = "full",
-) -> Simulation | SimulationRead:
-    """Simulate the tractor driving a stored plan; store and return the run.
+) -> Job:
+    """Simulate the tractor driving a stored plan, as a background job (product.md §13).
 
-    The body is optional (defaults: seed 0, `m8n`, `waypoint`).
+    Answers 202 at once with the job and `Location: /api/jobs/{id}`; the job's `result_url`
+    names the stored simulation when it is done. With `runs` > 1 it is a Monte Carlo batch
+    over seeds `seed … seed+runs-1`: the result summarises each metric, and the stored
+    simulation is the run of median cross-track RMS. The body is optional (defaults: seed 0,
+    `m8n`, `waypoint`, one run).
     """
     plan = services.read_plan(session, plan_id, access)
-    end_reads(session)  # no connection held while simulating
-    with heavy.slot("simulation"):
-        simulated = services.simulate_plan(plan, body or SimulationCreate())
-    simulation = add_row(session, simulated, parent=(Plan, plan.id, "plan"))
-    response.headers["Location"] = f"/api/simulations/{simulation.id}"
-    return _answer(simulation, tracks)
+    jobs = get_jobs(request)  # after the plan: a missing plan is 404 whatever the engine
+    body = body or SimulationCreate()
+    kind = "monte_carlo" if body.runs > 1 else "simulation"
+    params = simulation_params(plan.id, body, utc_now().date())
+    job = submit_job(session, jobs, access, kind, params)
+    response.headers["Location"] = f"/api/jobs/{job.id}"
+    return job
 
 
 @router.get(

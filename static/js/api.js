@@ -101,10 +101,7 @@ export class ChecksApi {
     this.apiUrl = apiUrl.replace(/\/+$/, "");
   }
 
-  /**
-   * Simulate a stored plan: `{seed, gps, guidance}`; the answer has metrics and the true track,
-   * thinned for drawing (`tracks=display`; the GPX export has every second of all three).
-   */
+  /** Simulate a stored plan: `{seed, gps, guidance, runs}`; the answer is a job to follow. */
   simulate(planId, body) {
     return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/simulations?tracks=display`, {
       method: "POST",
@@ -119,6 +116,15 @@ export class ChecksApi {
 
   readSimulation(id) {
     return requestJson(`${this.apiUrl}/simulations/${encodeURIComponent(id)}?tracks=display`);
+  }
+
+  /** A background job (product.md §13): `{id, status, progress, result, result_url, error}`. */
+  readJob(id) {
+    return requestJson(`${this.apiUrl}/jobs/${encodeURIComponent(id)}`);
+  }
+
+  cancelJob(id) {
+    return requestJson(`${this.apiUrl}/jobs/${encodeURIComponent(id)}`, { method: "DELETE" });
   }
 
   simulationGpxUrl(id) {
@@ -152,5 +158,10 @@ export class ChecksApi {
 
   runKmlUrl(id) {
     return `${this.apiUrl}/runs/${encodeURIComponent(id)}/export/kml`;
+  }
+
+  /** Plan a path over the ground run `id` missed; the answer is the stored plan. */
+  followUp(id) {
+    return requestJson(`${this.apiUrl}/runs/${encodeURIComponent(id)}/follow-up`, { method: "POST" });
   }
 }

@@ -7,6 +7,9 @@
 
 import { formatDate, formatDuration, formatMetres, formatPercent } from "./format.js";
 import { t, tn } from "./i18n.js";
+import { ApiError } from "./api.js";
+import { JobCancelled, JobFailed, followJob, jobProgress } from "./jobs.js";
+import { drawMissed, missedText, receiverText } from "./missed.js";
 
 /** How often a live run is fetched again [ms]. */
 export const LIVE_POLL_MS = 3000;
@@ -55,6 +58,20 @@ function fillFigures(container, metrics, extra = {}) {
   }
 }
 
+/** One sentence on a Monte Carlo batch: completion and the cross-track RMS's spread. */
+function summaryText(summary, runs) {
+  const rms = summary?.cross_track_rms_m;
+  const completed = formatPercent(summary?.completed_share);
+  if (!rms) return t("{runs} runs, {completed} completed.", { runs: String(runs), completed });
+  return t("{runs} runs, {completed} completed; cross-track RMS {median} median, {p5} to {p95} (5th to 95th percentile).", {
+    runs: String(runs),
+    completed,
+    median: formatMetres(rms.median),
+    p5: formatMetres(rms.p5),
+    p95: formatMetres(rms.p95),
+  });
+}
+
 function stretchesText(metrics) {
   if (!metrics) return "–";
   const n = metrics.stretches.length;
@@ -77,13 +94,16 @@ function stretchesText(metrics) {
  * @param {(text: string) => void} options.setStatus
  * @param {(error: unknown) => void} options.showFailure
  * @param {() => void} options.clearError
+ * @param {(plan: object) => void} [options.onPlanCreated] a follow-up plan was stored
  * @returns {{planChanged: (planId: number | null) => void}}
  */
-export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus }) {
+export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus, onPlanCreated }) {
   const ui = {
     card: $("check"),
     gps: $("sim-gps"),
     guidance: $("sim-guidance"),
+    runsCount: $("sim-runs"),
+    summary: $("simulation-summary"),
     simulate: $("simulate"),
     upload: $("upload-track"),
     file: $("track-file"),
@@ -96,10 +116,16 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     runTitle: $("run-title"),
     runGpx: $("run-gpx"),
     runKml: $("run-kml"),
+    runReceiver: $("run-receiver"),
+    followUp: $("follow-up"),
     runs: $("runs-list"),
     runsEmpty: $("runs-empty"),
   };
   const state = { planId: null, simLayer: null, runLayer: null, runId: null, run: null, timer: null, seq: 0 };
+  const progress = jobProgress(
+    { box: $("sim-job"), bar: $("sim-progress"), label: $("sim-progress-label"), cancel: $("sim-cancel") },
+    (id) => api.cancelJob(id),
+  );
 
   function setEnabled() {
     const enabled = state.planId != null;
@@ -129,7 +155,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     ui.run.hidden = true;
   }
 
-  function showSimulation(simulation) {
+  function showSimulation(simulation, result = null) {
     clearSimulation();
     const track = simulation.tracks.features.find((f) => f.properties?.source === "true");
     state.simLayer = L.polyline(latLngs(track.geometry.coordinates), {
@@ -138,7 +164,13 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
       className: "simulated-track",
     }).addTo(map);
     const { gps, guidance, seed } = simulation.config;
-    ui.simulationTitle.textContent = simulationLabel(simulation.config);
+    const runs = result?.runs ?? 1;
+    ui.simulationTitle.textContent =
+      runs > 1
+        ? t("{label}: the median of {runs} runs", { label: simulationLabel(simulation.config), runs: String(runs) })
+        : simulationLabel(simulation.config);
+    ui.summary.hidden = runs <= 1;
+    if (runs > 1) ui.summary.textContent = summaryText(result.summary, runs);
     fillFigures(ui.simulation, simulation.metrics);
     ui.simulationGpx.href = api.simulationGpxUrl(simulation.id);
     ui.simulationKml.href = api.simulationKmlUrl(simulation.id);
@@ -173,6 +205,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
         )
         .addTo(group);
     }
+    const gaps = drawMissed(group, run);
     if (run.last_fix) {
       L.marker([run.last_fix.lat, run.last_fix.lon], {
         pmIgnore: true,
@@ -188,7 +221,11 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     fillFigures(ui.run, run.metrics, {
       fixes: String(run.fix_count),
       stretches: stretchesText(run.metrics),
+      missed: missedText(run),
     });
+    ui.runReceiver.textContent = receiverText(run);
+    ui.runReceiver.hidden = !ui.runReceiver.textContent;
+    ui.followUp.hidden = gaps === 0;
     ui.runGpx.href = api.runGpxUrl(run.id);
     ui.runGpx.hidden = run.fix_count === 0;
     ui.runKml.href = api.runKmlUrl(run.id);
@@ -306,33 +343,75 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     }
   }
 
+  async function planFollowUp() {
+    const id = state.runId;
+    if (id == null) return;
+    clearError();
+    ui.followUp.disabled = true;
+    setStatus(t("Planning the missed ground…"));
+    try {
+      const plan = await api.followUp(id);
+      setStatus(t("Follow-up plan saved: {count} lines over the missed ground.", { count: plan.stats.line_count }));
+      onPlanCreated?.(plan);
+    } catch (error) {
+      setStatus("");
+      showFailure(error);
+    } finally {
+      ui.followUp.disabled = false;
+    }
+  }
+
   async function simulate() {
     const planId = state.planId;
     if (planId == null) return;
     clearError();
     const seq = ++state.seq;
+    const runs = Math.min(500, Math.max(1, Math.round(Number(ui.runsCount.value) || 1)));
+    ui.runsCount.value = String(runs);
+    const what = runs > 1 ? t("Simulating {runs} runs", { runs: String(runs) }) : t("Simulating the tractor");
     ui.simulate.disabled = true;
     ui.card.setAttribute("aria-busy", "true");
-    setStatus(t("Simulating the tractor…"), { sticky: true });
+    setStatus(`${what}…`, { sticky: true });
     try {
       const body = {
         seed: Math.floor(Math.random() * 1_000_000),
         gps: ui.gps.value,
         guidance: ui.guidance.value,
+        runs,
       };
-      const simulation = await api.simulate(planId, body);
+      const started = await api.simulate(planId, body);
+      const job = await followJob(api, started, {
+        onProgress: (current) => {
+          if (seq === state.seq) progress.show(current, what);
+        },
+        stillWanted: () => seq === state.seq && planId === state.planId,
+      });
+      if (job == null || seq !== state.seq || planId !== state.planId) return;
+      const simulation = await api.readSimulation(job.result.simulation_id);
       if (seq !== state.seq || planId !== state.planId) return;
-      showSimulation(simulation);
-      onResult(t("Simulated run: {time}.", { time: formatDuration(simulation.metrics.time_s) }));
+      showSimulation(simulation, job.result);
+      onResult(
+        runs > 1
+          ? t("Simulated {runs} runs; the median run took {time}.", { runs: String(runs), time: formatDuration(simulation.metrics.time_s) })
+          : t("Simulated run: {time}.", { time: formatDuration(simulation.metrics.time_s) }),
+      );
       refreshRuns();
     } catch (error) {
       if (seq === state.seq) {
-        setStatus("");
-        showFailure(error);
+        if (error instanceof JobCancelled) {
+          setStatus(t("Simulation cancelled."));
+        } else {
+          setStatus("");
+          // A failed job's message names the input and the problem, as a 422 does.
+          showFailure(error instanceof JobFailed ? new ApiError(422, error.message) : error);
+        }
       }
     } finally {
-      ui.card.setAttribute("aria-busy", "false");
-      setEnabled();
+      if (seq === state.seq) {
+        progress.hide();
+        ui.card.setAttribute("aria-busy", "false");
+        setEnabled();
+      }
     }
   }
 
@@ -359,6 +438,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
   }
 
   ui.simulate.addEventListener("click", simulate);
+  ui.followUp.addEventListener("click", planFollowUp);
   ui.upload.addEventListener("click", () => ui.file.click());
   ui.file.addEventListener("change", () => {
     const [file] = ui.file.files;
@@ -372,6 +452,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
       if (planId === state.planId) return;
       state.planId = planId;
       state.seq += 1;
+      progress.hide();
+      ui.card.setAttribute("aria-busy", "false");
       clearSimulation();
       clearRun();
       setEnabled();

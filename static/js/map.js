@@ -721,6 +721,10 @@ async function main() {
     showFailure,
     clearError,
     onResult: showResultOnPhone,
+    onPlanCreated: async (plan) => {
+      await state.saved.refresh();
+      await openPlan(plan.id);
+    },
   });
   state.saved = setUpSavedPlans({
     api: state.api,

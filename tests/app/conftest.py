@@ -15,6 +15,7 @@ leave rows in the shared one. The schema is made by ``alembic upgrade head``, ne
 from __future__ import annotations
 
 import json
+import uuid
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from functools import cache
@@ -31,7 +32,7 @@ from starlette.testclient import TestClient
 
 from app import accounts
 from app.auth_models import Membership, Organisation, User
-from app.db import alembic_config, get_session, make_engine, upgrade_database
+from app.db import alembic_config, get_engine, get_session, make_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
 from tests.databases import DATABASES, scratch_pg_database
@@ -220,3 +221,93 @@ def paper_geojson() -> dict[str, Any]:
 def paper_body(paper_geojson: dict[str, Any]) -> dict[str, Any]:
     """A valid request: the paper field at 4 m, named."""
     return {"name": "Sawah Ketewel", "field": paper_geojson, "interval_m": 4}
+
+
+# --- Background jobs: a real Dask cluster and a database its worker processes can open -------
+
+
+@pytest.fixture(scope="session", params=DATABASES)
+def jobs_database_url(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[str]:
+    """A migrated database of each kind that worker processes can open (a file, or a server)."""
+    if request.param == "sqlite":
+        url = f"sqlite:///{tmp_path_factory.mktemp('jobs') / 'jobs.db'}"
+        upgrade_database(url)
+        yield url
+        get_engine(url).dispose()
+        return
+    with scratch_pg_database() as url:
+        upgrade_database(url)
+        yield url
+        get_engine(url).dispose()
+
+
+@dataclass(frozen=True)
+class JobsCaller:
+    """An organisation of its own in the jobs database, and its owner's token."""
+
+    organisation_id: int
+    user_id: int
+    token: str
+
+
+@pytest.fixture
+def jobs_caller(jobs_session: Session) -> JobsCaller:
+    """A fresh organisation and owner for each test (the jobs database lives for the session)."""
+    tag = uuid.uuid4().hex[:10]
+    org = Organisation(name=f"jobs-{tag}")
+    jobs_session.add(org)
+    jobs_session.flush()
+    user = add_user(jobs_session, f"jobs-owner-{tag}", {org.id: "owner"})
+    token = accounts.create_token(jobs_session, user, name="jobs test").token
+    caller = JobsCaller(organisation_id=org.id, user_id=user.id, token=token)
+    # Leave no read transaction open: the test's later reads must see what workers commit.
+    jobs_session.commit()
+    return caller
+
+
+@pytest.fixture
+def jobs_client(
+    jobs_database_url: str, dask_scheduler: str, jobs_caller: JobsCaller
+) -> Iterator[TestClient]:
+    """A client of an app whose jobs run on the session's Dask cluster, as an owner."""
+    app = create_app(
+        Settings(
+            database_url=jobs_database_url,
+            dask_scheduler=dask_scheduler,
+            max_body_bytes=TEST_MAX_BODY_BYTES,
+            max_upload_bytes=TEST_MAX_UPLOAD_BYTES,
+        )
+    )
+    with TestClient(app, headers={"Authorization": f"Bearer {jobs_caller.token}"}) as client:
+        yield client
+
+
+@pytest.fixture
+def jobs_session(jobs_database_url: str) -> Iterator[Session]:
+    """A session on the jobs database, to look at what the workers stored."""
+    with Session(get_engine(jobs_database_url)) as session:
+        yield session
+    # Close the pooled connections once the session (torn down after the client) is closed:
+    # another test may clear get_engine's cache, and an engine dropped with open connections
+    # warns when it is collected.
+    get_engine(jobs_database_url).dispose()
+
+
+def wait_for_job(
+    client: TestClient, location: str, *, timeout_s: float = 60.0, until: tuple[str, ...] = ()
+) -> dict[str, Any]:
+    """Poll a job until it has finished (or reached a status of ``until``); return it."""
+    import time
+
+    final = ("done", "failed", "cancelled", *until)
+    deadline = time.monotonic() + timeout_s
+    while True:
+        response = client.get(location)
+        assert response.status_code == 200, response.text
+        job: dict[str, Any] = response.json()
+        if job["status"] in final:
+            return job
+        assert time.monotonic() < deadline, f"job still {job['status']} after {timeout_s} s"
+        time.sleep(0.1)

@@ -25,6 +25,7 @@ from app.errors import (
     DatabaseBusyError,
     NotFoundError,
     ServerBusyError,
+    UnavailableError,
     UploadTooLargeError,
     format_validation_errors,
     status_for,
@@ -278,6 +279,7 @@ def test_error_table_maps_every_planner_error_to_422():
     assert set(STATUS_CODES.values()) == {401, 404, 409, 413, 422, 429, 503}
     assert status_for(ServerBusyError("simulation")) == 503
     assert status_for(DatabaseBusyError()) == 503
+    assert status_for(UnavailableError("jobs: no engine")) == 503
 
 
 def test_format_validation_errors_names_nested_inputs():

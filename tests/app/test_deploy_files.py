@@ -38,7 +38,7 @@ def compose() -> dict[str, Any]:
 
 def test_compose_runs_app_on_postgres_16_with_volume_and_healthcheck():
     services = compose()["services"]
-    assert set(services) == {"app", "db"}
+    assert set(services) == {"app", "db", "scheduler", "worker"}
     db = services["db"]
     assert db["image"] == "postgres:16"
     volume, mount = db["volumes"][0].split(":")
@@ -83,10 +83,15 @@ def dockerfile_instructions() -> list[tuple[str, str]]:
 def test_dockerfile_builds_the_app_the_way_the_contract_says():
     rows = dockerfile_instructions()
     froms = [rest for keyword, rest in rows if keyword == "FROM"]
-    assert froms[-1] == "python:3.11-slim"
+    assert froms[-1] == "python:3.11-slim-bookworm"
+    node = next(f for f in froms if f.startswith("node:"))
+    # Node 20 reached end of life on 2026-04-30: an LTS line at 24 or later.
+    assert int(node.split(":")[1].split("-")[0]) >= 24, node
     runs = " ".join(rest for keyword, rest in rows if keyword == "RUN")
-    assert "npm ci" in runs
-    assert "pip install ." in runs
+    assert "npm ci" in runs and "--ignore-scripts" in runs
+    # Dependencies exactly as locked; the project from its wheel, without resolving anything.
+    assert "pip install -r /tmp/requirements.lock" in runs
+    assert "pip install --no-deps /tmp/dist/*.whl" in runs
     cmd = next(rest for keyword, rest in reversed(rows) if keyword == "CMD")
     assert cmd.startswith("[")
     args = yaml.safe_load(cmd)  # a JSON array is YAML too
@@ -107,3 +112,28 @@ def test_dockerignore_keeps_local_state_out_of_the_image():
         assert entry in ignored
     for needed in ("app", "planner", "migrations", "templates", "static", "alembic.ini"):
         assert needed not in ignored
+
+
+def test_compose_runs_jobs_on_its_dask_cluster():
+    services = compose()["services"]
+    app, scheduler, worker = services["app"], services["scheduler"], services["worker"]
+    assert app["environment"]["TILLPATH_DASK_SCHEDULER"] == "tcp://scheduler:8786"
+    assert scheduler["command"][:2] == ["dask", "scheduler"]
+    assert worker["command"][:3] == ["dask", "worker", "tcp://scheduler:8786"]
+    # Workers open the database themselves: the same URL as the app.
+    assert (
+        worker["environment"]["TILLPATH_DATABASE_URL"]
+        == app["environment"]["TILLPATH_DATABASE_URL"]
+    )
+    assert scheduler["image"] == worker["image"] == app["image"]
+
+
+def test_the_lock_files_pin_every_package_the_project_declares():
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    declared = dict(re.findall(r'"([A-Za-z0-9_.\-]+)(?:\[[a-z,]+\])?==([^"]+)"', pyproject))
+    lock = (ROOT / "requirements-dev.lock").read_text()
+    locked = dict(re.findall(r"^([A-Za-z0-9_.\-]+)==(\S+)", lock, re.M))
+    norm = {k.lower().replace("_", "-"): v for k, v in locked.items()}
+    for name, version in declared.items():
+        assert norm.get(name.lower().replace("_", "-")) == version, name
+    assert "orjson" not in norm  # declared once and never imported: gone

@@ -184,3 +184,40 @@ def test_concurrent_writers_all_succeed(engine: Engine):
     assert errors == []
     with engine.connect() as conn:
         assert conn.execute(text("SELECT count(*) FROM plans")).scalar_one() == 200
+
+
+def test_an_nmea_upload_keeps_its_gga_quality_through_the_bulk_path(engine: Engine):
+    """An NMEA log read as a stream and stored in bulk (``COPY`` on PostgreSQL) keeps the
+    quality, HDOP and satellites of each GGA (i10's columns), and the receiver shares."""
+    import datetime as dt
+    import io
+
+    from app.receiver import receiver_report
+    from app.tracks import read_track
+    from tests.app.track_files import RUN_START, nmea_lines, simulated_run
+
+    quality = [4] * 360 + [5] * 180 + [2] * 60  # RTK fixed, RTK float, DGPS
+    assert len(quality) > ingest.COPY_MIN_ROWS  # so PostgreSQL takes the COPY path
+    track = simulated_run()
+    n = len(quality)
+    times = [RUN_START + dt.timedelta(seconds=round(float(t), 2)) for t in track.time_s[:n]]
+    log = "\r\n".join(nmea_lines(times, track.lon[:n], track.lat[:n], quality=quality)) + "\r\n"
+    stream = read_track(io.BytesIO(log.encode()))
+    assert stream.format == "nmea"
+    columns = ingest.collect(stream.fixes)
+    assert "quality" in ingest.fix_columns() and "hdop" in ingest.fix_columns()
+    with Session(engine, expire_on_commit=False) as session:
+        plan = a_plan(session)
+        run = runs.create_run_from_columns(
+            session, plan, columns, source="nmea", report=stream.report, name="rtk"
+        )
+        stored = session.scalars(
+            select(Fix.quality).where(Fix.run_id == run.id).order_by(Fix.t)
+        ).all()
+        assert stored == ["rtk_fixed"] * 360 + ["rtk_float"] * 180 + ["dgps"] * 60
+        assert session.scalar(select(func.count()).where(Fix.hdop.is_(None))) == 0
+        assert session.scalar(select(func.count()).where(Fix.satellites.is_(None))) == 0
+        loaded = runs.load_track(session, run.id)
+        session.commit()
+    shares = receiver_report(loaded.quality, loaded.hdop, loaded.satellites)["shares"]
+    assert shares["rtk_fixed"] == 0.6 and shares["rtk_float"] == 0.3 and shares["dgps"] == 0.1

@@ -53,6 +53,10 @@ def test_a_poll_answers_the_new_fixes_and_the_figures_catch_up(
         # The figures are the last ones computed; a recomputation has started meanwhile.
         assert poll["metrics_fix_count"] == 300
         assert poll["metrics"] == full["metrics"]
+        # Missed ground and the receiver note come from the same cache: not recomputed per poll.
+        assert full["missed"]["features"], "the creeping run leaves most of the field missed"
+        assert poll["missed"] == full["missed"]
+        assert poll["receiver"] == full["receiver"]
 
         deadline = time.monotonic() + 20
         while True:
@@ -63,7 +67,9 @@ def test_a_poll_answers_the_new_fixes_and_the_figures_catch_up(
             time.sleep(0.1)
         assert again["track"] is None  # nothing newer than the last fix
         assert again["metrics"]["fix_count"] == 500
-        assert again["metrics"] == client.get(url).json()["metrics"]
+        latest = client.get(url).json()
+        assert again["metrics"] == latest["metrics"]
+        assert again["missed"] == latest["missed"] and again["missed"] != full["missed"]
 
 
 def test_a_poll_with_a_bad_since_is_a_422(server_url: ServerUrl):  # noqa: F811

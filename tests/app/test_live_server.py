@@ -178,7 +178,8 @@ def test_tillpath_serve_migrates_then_serves(tmp_path: Path):
         assert httpx2.get(f"{base}/api/auth/setup").json() == {"needs_first_account": False}
     finally:
         process.terminate()
-        process.wait(timeout=10)
+        # The server also stops its local Dask cluster (worker processes) on the way out.
+        process.wait(timeout=30)
         said = process.stderr.read().decode() if process.stderr else ""
         if process.stderr:
             process.stderr.close()

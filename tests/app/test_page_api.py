@@ -9,6 +9,7 @@ from typing import Any
 from fastapi.testclient import TestClient
 
 from app.display import DISPLAY_TOLERANCE_M, METRES_PER_DEGREE
+from tests.app.conftest import wait_for_job
 
 
 def create(client: TestClient, body: dict[str, Any], name: str) -> dict[str, Any]:
@@ -35,16 +36,24 @@ def test_plans_are_searched_by_name_and_paged(
     assert client.get("/api/plans", params={"q": "x" * 201}).status_code == 422
 
 
+def simulate(client: TestClient, plan_id: int, **body: Any) -> dict[str, Any]:
+    """Run a simulation job to its end; return the stored simulation (issue 14)."""
+    started = client.post(f"/api/plans/{plan_id}/simulations", json=body)
+    assert started.status_code == 202, started.text
+    job = wait_for_job(client, started.headers["location"])
+    assert job["status"] == "done", job
+    simulation: dict[str, Any] = client.get(job["result_url"]).json()
+    return simulation
+
+
 def test_a_plans_simulations_are_listed_newest_first(
-    client: TestClient, paper_body: dict[str, Any]
+    jobs_client: TestClient, paper_body: dict[str, Any]
 ) -> None:
+    client = jobs_client
     plan = create(client, paper_body, "Listed")
     other = create(client, paper_body, "Other")
-    ids = [
-        client.post(f"/api/plans/{plan['id']}/simulations", json={"seed": seed}).json()["id"]
-        for seed in (1, 2)
-    ]
-    client.post(f"/api/plans/{other['id']}/simulations", json={"seed": 3})
+    ids = [simulate(client, plan["id"], seed=seed)["id"] for seed in (1, 2)]
+    simulate(client, other["id"], seed=3)
     listed = client.get(f"/api/plans/{plan['id']}/simulations").json()
     assert [s["id"] for s in listed["items"]] == ids[::-1]
     assert listed["total"] == 2
@@ -54,12 +63,13 @@ def test_a_plans_simulations_are_listed_newest_first(
 
 
 def test_display_tracks_are_the_true_track_thinned_within_tolerance(
-    client: TestClient, paper_body: dict[str, Any]
+    jobs_client: TestClient, paper_body: dict[str, Any]
 ) -> None:
     import shapely
 
+    client = jobs_client
     plan = create(client, paper_body, "Thin")
-    full = client.post(f"/api/plans/{plan['id']}/simulations", json={"seed": 5}).json()
+    full = simulate(client, plan["id"], seed=5)
     shown = client.get(f"/api/simulations/{full['id']}", params={"tracks": "display"}).json()
     (true,) = [f for f in full["tracks"]["features"] if f["properties"]["source"] == "true"]
     assert [f["properties"]["source"] for f in shown["tracks"]["features"]] == ["true"]

@@ -7,6 +7,7 @@ from typing import Any
 
 import gpxpy
 import numpy as np
+import pytest
 from lxml import etree
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
@@ -15,7 +16,26 @@ from starlette.testclient import TestClient
 from app.models import Simulation
 from navigation import score_track
 from planner.export import plan_from_geojson
-from tests.app.conftest import GPX_XSD
+from tests.app.conftest import GPX_XSD, wait_for_job
+
+
+@pytest.fixture
+def client(jobs_client: TestClient) -> TestClient:
+    """Simulations are background jobs: their workers need a database they can open."""
+    return jobs_client
+
+
+@pytest.fixture
+def session(jobs_session: Session) -> Session:
+    return jobs_session
+
+
+def simulation_count(session: Session, plan_id: int) -> int:
+    session.rollback()  # a fresh snapshot: see what the workers committed since
+    count = session.scalar(
+        select(func.count()).select_from(Simulation).where(Simulation.plan_id == plan_id)
+    )
+    return int(count or 0)
 
 
 def create_plan(client: TestClient, body: dict[str, Any]) -> dict[str, Any]:
@@ -27,9 +47,14 @@ def create_plan(client: TestClient, body: dict[str, Any]) -> dict[str, Any]:
 
 def simulate(client: TestClient, plan_id: int, **body: Any) -> dict[str, Any]:
     response = client.post(f"/api/plans/{plan_id}/simulations", json=body)
-    assert response.status_code == 201, response.text
-    assert response.headers["location"] == f"/api/simulations/{response.json()['id']}"
-    simulation: dict[str, Any] = response.json()
+    assert response.status_code == 202, response.text
+    assert response.headers["location"] == f"/api/jobs/{response.json()['id']}"
+    job = wait_for_job(client, response.headers["location"])
+    assert job["status"] == "done", job
+    assert job["result_url"] == f"/api/simulations/{job['result']['simulation_id']}"
+    stored = client.get(job["result_url"])
+    assert stored.status_code == 200
+    simulation: dict[str, Any] = stored.json()
     return simulation
 
 
@@ -40,7 +65,7 @@ def true_track(simulation: dict[str, Any]) -> dict[str, Any]:
     return feature
 
 
-def test_create_simulation_returns_201_with_metrics_and_tracks(
+def test_create_simulation_runs_a_job_that_stores_metrics_and_tracks(
     client: TestClient, session: Session, paper_body: dict[str, Any]
 ):
     plan = create_plan(client, paper_body)
@@ -62,7 +87,7 @@ def test_create_simulation_returns_201_with_metrics_and_tracks(
         "estimated",
         "gps",
     }
-    assert session.scalar(select(func.count()).select_from(Simulation)) == 1
+    assert simulation_count(session, plan["id"]) == 1
 
 
 def test_simulation_metrics_are_those_of_its_true_track(
@@ -105,12 +130,15 @@ def test_create_simulation_without_body_uses_defaults(
 ):
     plan = create_plan(client, paper_body)
     response = client.post(f"/api/plans/{plan['id']}/simulations")
-    assert response.status_code == 201, response.text
-    assert response.json()["config"] | {"date": None} == {
+    assert response.status_code == 202, response.text
+    job = wait_for_job(client, response.headers["location"])
+    simulation = client.get(job["result_url"]).json()
+    assert simulation["config"] | {"date": None} == {
         "seed": 0,
         "gps": "m8n",
         "guidance": "waypoint",
         "date": None,
+        "vehicle": "hand_tractor",  # the plan's vehicle (the default, as it names none)
     }
 
 
@@ -144,7 +172,10 @@ def test_bad_guidance_and_seed_return_422_naming_them(
     extra = client.post(url, json={"speed": 3})
     assert extra.status_code == 422
     assert extra.json()["detail"] == "speed: is not a known input"
-    assert session.scalar(select(func.count()).select_from(Simulation)) == 0
+    runs = client.post(url, json={"runs": 501})
+    assert runs.status_code == 422
+    assert runs.json()["detail"].startswith("runs: must be at most 500")
+    assert simulation_count(session, plan["id"]) == 0
 
 
 def test_simulation_of_unknown_plan_returns_404(client: TestClient):
@@ -189,6 +220,5 @@ def test_deleting_the_plan_deletes_its_simulations(
     plan = create_plan(client, paper_body)
     simulation = simulate(client, plan["id"])
     assert client.delete(f"/api/plans/{plan['id']}").status_code == 204
-    session.expire_all()
     assert client.get(f"/api/simulations/{simulation['id']}").status_code == 404
-    assert session.scalar(select(func.count()).select_from(Simulation)) == 0
+    assert simulation_count(session, plan["id"]) == 0

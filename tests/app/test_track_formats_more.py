@@ -26,6 +26,7 @@ from app.track_formats import gps_to_utc
 from app.tracks import TrackFormatError, datetime_to_us, parse_track
 from planner.export.gpx import GpxTrack, plan_to_gpx
 from planner.export.kml import tracks_to_kml
+from tests.app.conftest import wait_for_job
 from tests.app.track_files import RUN_START, nmea_lines, simulated_run
 from tests.planner.test_io_safety import BILLION_LAUGHS
 
@@ -257,12 +258,15 @@ def test_uploaded_ubx_run_exports_as_kml_that_reads_back(
 
 
 def test_simulation_exports_as_kml_with_its_three_tracks(
-    client: TestClient, paper_body: dict[str, Any]
+    jobs_client: TestClient, paper_body: dict[str, Any]
 ) -> None:
     import pyogrio
 
+    client = jobs_client  # simulations are background jobs (issue 14)
     plan = client.post("/api/plans", json=paper_body).json()
-    simulation = client.post(f"/api/plans/{plan['id']}/simulations", json={"seed": 1}).json()
+    started = client.post(f"/api/plans/{plan['id']}/simulations", json={"seed": 1})
+    job = wait_for_job(client, started.headers["location"])
+    simulation = client.get(job["result_url"]).json()
     kml = client.get(f"/api/simulations/{simulation['id']}/export/kml")
     assert kml.status_code == 200
     layers = {str(name) for name, _ in pyogrio.list_layers(kml.content)}

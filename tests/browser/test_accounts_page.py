@@ -78,7 +78,7 @@ def test_sign_in_says_when_it_fails_then_signs_in(open_map: MapPageOpener) -> No
     page.get_by_label("Username").fill(TEST_USERNAME)
     page.get_by_label("Password").fill("not the password")
     page.get_by_role("button", name="Sign in").click()
-    expect(page.locator("#auth-error")).to_have_text("username or password is wrong")
+    expect(page.locator("#auth-error")).to_have_text("Username or password is wrong.")
     page.get_by_label("Password").fill(TEST_PASSWORD)
     page.get_by_role("button", name="Sign in").click()
     page.wait_for_selector("#app[data-ready='true']")
@@ -145,7 +145,7 @@ def test_a_field_of_the_registry_is_planned_again_from_the_list(
         page.get_by_role("button", name="Save plan").click()
     saved = info.value.json()
     assert saved["field_id"] == made["id"]  # the same boundary: the registry's field, reused
-    expect(item.locator(".plan-meta")).to_have_text("1 plans")
+    expect(item.locator(".plan-meta")).to_have_text("1 plan")
     # Deleting it asks what becomes of its plans; keeping them keeps the plan.
     item.get_by_role("button", name=f"Delete {name}").click()
     item.get_by_role("button", name="Delete field, keep plans").click()

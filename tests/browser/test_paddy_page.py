@@ -148,7 +148,8 @@ def test_gps_without_https_says_https_is_needed(page: Page) -> None:
 def test_an_invalid_interval_clears_the_previous_path(page: Page) -> None:
     import_paper_field(page)
     generate(page)
-    expect(figure(page, "Lines")).to_have_text("4")
+    # A plan is on screen first (whatever its line count: R5 may add a line), then it goes.
+    expect(figure(page, "Lines")).to_have_text(re.compile(r"^[1-9][0-9]*$"))
     page.get_by_label("Interval (m)").fill("four")
     button(page, "Generate path").click()
     alert = page.get_by_role("alert")
@@ -182,7 +183,10 @@ def test_a_drawn_bow_tie_is_refused_in_words(page: Page) -> None:
 def test_simulations_are_listed_with_their_plan_after_a_reload(page: Page) -> None:
     import_paper_field(page)
     plan = save(page, f"Listed {uuid.uuid4().hex[:6]}")
-    with page.expect_response(lambda r: "/simulations" in r.url and r.status == 201) as answer:
+    # The simulation is a job: the page reads the stored simulation when the job is done.
+    with page.expect_response(
+        lambda r: "/api/simulations/" in r.url and r.status == 200, timeout=60_000
+    ) as answer:
         button(page, "Simulate").click()
     simulation = answer.value.json()
     page.reload()

@@ -127,3 +127,39 @@ def test_live_run_grows_on_the_map_while_fixes_arrive(page: Page, server_url: Se
     moved = tractor.bounding_box()
     assert first is not None and moved is not None
     assert (first["x"], first["y"]) != (moved["x"], moved["y"])
+
+
+def test_a_run_that_skipped_a_line_shows_its_missed_ground_and_plans_a_follow_up(
+    page: Page, tmp_path: Path
+) -> None:
+    from tests.app.test_run_quality import _skipping_track
+
+    plan = saved_paper_plan(page)
+    lon, lat = _skipping_track(skip_line=2)
+    rows = ["time,lat,lon"] + [
+        f"{1767225600 + 0.2 * i:.1f},{la:.9f},{lo:.9f}"
+        for i, (lo, la) in enumerate(zip(lon, lat, strict=True))
+    ]
+    track_file = tmp_path / "skipped.csv"
+    track_file.write_text("\n".join(rows) + "\n")
+    with page.expect_response(
+        lambda r: r.request.method == "POST" and r.url.endswith(f"/plans/{plan['id']}/runs")
+    ) as answer:
+        with page.expect_file_chooser() as chooser:
+            button(page, "Upload track").click()
+        chooser.value.set_files(track_file)
+    run = answer.value.json()
+    gaps = run["missed"]["features"]
+    assert gaps
+    # The gaps are drawn, counted, and the receiver's worth is said plainly.
+    expect(page.locator("path.missed-ground")).to_have_count(len(gaps))
+    expect(metric(page, "Missed ground")).to_contain_text(f"{len(gaps)} gap")
+    expect(page.get_by_role("note")).to_contain_text("metre-level estimates")
+    # One click plans the missed ground: a new saved plan, opened on the map.
+    with page.expect_response(lambda r: r.url.endswith(f"/runs/{run['id']}/follow-up")) as made:
+        button(page, "Plan the missed ground").click()
+    assert made.value.status == 201, made.value.text()
+    follow_up = made.value.json()
+    saved = page.get_by_role("list", name="Saved plans")
+    expect(saved).to_contain_text(f"follow-up of run {run['id']}")
+    expect(page.get_by_role("status")).to_contain_text(follow_up["name"][:20])

@@ -31,6 +31,7 @@ HEAD_TABLES = {
     "login_sessions",
     "login_attempts",
     "fields",
+    "jobs",
 }
 
 

@@ -127,3 +127,64 @@ def test_a_long_single_run_completes_with_its_progress_bar(tmp_path: Path) -> No
     out = json.loads(result.stdout)
     assert out["scenario"]["waypoints"] >= 40
     assert out["metrics"]["completed"] is True
+
+
+def _static_csv(path: Path, *, seed: int, n: int = 18_000, rate_hz: float = 5.0) -> None:
+    """A receiver standing still near Ketewel for an hour, logged as CSV (m8n model)."""
+    import numpy as np
+
+    from navigation.sensors import GpsReceiver
+    from navigation.types import GPS_PRESETS, VehicleState
+    from planner import local_frame
+
+    frame = local_frame(115.298, -8.6265)
+    rx = GpsReceiver(GPS_PRESETS["m8n"], np.random.default_rng(seed))
+    fixes = [rx.read(VehicleState(0.0, 0.0, 0.0), i / rate_hz) for i in range(n)]
+    lon, lat = frame.to_lonlat_xy([f.x_m for f in fixes], [f.y_m for f in fixes])
+    lines = ["time,lat,lon"]
+    lines += [
+        f"{1767225600 + f.time_s:.3f},{la:.9f},{lo:.9f}"
+        for f, lo, la in zip(fixes, lon, lat, strict=True)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_gps_from_a_static_log_fits_the_receiver_model(tmp_path: Path) -> None:
+    log = tmp_path / "static.csv"
+    _static_csv(log, seed=11)
+    result = invoke(PAPER, "--gps-from", str(log), "--seed", "1")
+    assert result.exit_code == 0, result.stderr
+    gps = json.loads(result.stdout)["scenario"]["gps"]
+    # The log was made with the m8n preset: 2.5 m CEP, 60 s, 5 Hz.
+    assert gps["name"] == "fitted:static.csv"
+    assert gps["rate_hz"] == pytest.approx(5.0, rel=1e-3)
+    assert gps["cep_m"] == pytest.approx(2.5, rel=0.2)
+    assert 30.0 < gps["correlation_time_s"] < 120.0
+
+
+def test_gps_from_a_log_that_moves_is_refused(tmp_path: Path) -> None:
+    moving = tmp_path / "moving.csv"
+    lines = ["time,lat,lon"] + [
+        f"{1767225600 + i},{-8.6265 + i * 1e-4:.7f},115.298" for i in range(200)
+    ]
+    moving.write_text("\n".join(lines) + "\n")
+    result = invoke(PAPER, "--gps-from", str(moving))
+    assert result.exit_code == 2
+    assert "error: --gps-from: log: moved" in result.stderr
+
+
+def test_the_papers_date_uses_wmm2020_and_2031_is_a_clear_error() -> None:
+    result = invoke(PAPER, "--date", "2021-02-01")
+    assert result.exit_code == 0, result.stderr
+    assert json.loads(result.stdout)["scenario"]["declination_deg"] == pytest.approx(0.92, abs=0.01)
+    late = invoke(PAPER, "--date", "2031-01-01")
+    assert late.exit_code == 2
+    assert "error: date: 2031.00 is outside every World Magnetic Model" in late.stderr
+    assert "Traceback" not in late.stderr
+
+
+def test_monte_carlo_reports_filter_consistency() -> None:
+    result = invoke(PAPER, "--runs", "4", "--gps", "rtk")
+    assert result.exit_code == 0, result.stderr
+    nees = json.loads(result.stdout)["summary"]["nees_consistency"]
+    assert nees["runs"] == 4 and nees["low"] < nees["mean"] < nees["high"] and nees["within"]

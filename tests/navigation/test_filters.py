@@ -94,3 +94,29 @@ def test_filter_removes_most_white_noise(straight_plan) -> None:  # type: ignore
     log = simulate(straight_plan, config, np.random.default_rng(7))
     assert log.metrics.gps_rms_m == pytest.approx(2.0 * math.sqrt(2), rel=0.15)
     assert log.metrics.filter_rms_m < 0.5 * log.metrics.gps_rms_m
+
+
+@pytest.mark.parametrize("gps", ["m8n", "rtk"])
+def test_mean_nees_lies_within_its_chi2_bounds_over_a_seeded_batch(paper_plan, gps: str) -> None:  # type: ignore[no-untyped-def]
+    from navigation.consistency import batch_consistency
+
+    runs = [
+        simulate(paper_plan, SimulationConfig(gps=gps), np.random.default_rng(s)).metrics
+        for s in range(10)
+    ]
+    nees = batch_consistency([m.nees_mean for m in runs], dof=2)
+    assert nees["within"], nees
+    # The compass bias (1.5° simulated) is estimated, to within a degree on average.
+    bias = np.array([m.compass_bias_estimate_deg for m in runs])
+    assert abs(bias.mean() - 1.5) < 1.0
+
+
+def test_the_white_noise_filter_is_overconfident_with_the_m8n(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    # Treating the receiver's wander as white noise (the old filter) states an uncertainty
+    # far below the real error: its NEES is many times the 2 expected.
+    from navigation.consistency import batch_consistency
+
+    config = SimulationConfig(gps="m8n", kalman=FilterParams(augmented=False))
+    runs = [simulate(paper_plan, config, np.random.default_rng(s)).metrics for s in range(5)]
+    nees = batch_consistency([m.nees_mean for m in runs], dof=2)
+    assert nees["mean"] > 5 * nees["high"]

@@ -7,6 +7,8 @@ import math
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from navigation import NavigationError, score_track
 from navigation.metrics import _polygon_mask
@@ -143,3 +145,98 @@ def test_polygon_mask_matches_shapely_on_a_field_with_a_hole() -> None:
     mask = _polygon_mask(poly, -2.0, -2.0, cell, nx, ny)
     gx, gy = np.meshgrid(-2 + (np.arange(nx) + 0.5) * cell, -2 + (np.arange(ny) + 0.5) * cell)
     assert np.array_equal(mask, shapely.contains_xy(poly, gx, gy))
+
+
+def _drift_track(two_line_plan):  # type: ignore[no-untyped-def]
+    """Line 0 driven north, but from 8 m to 20 m the tractor sits on line 1 (4 m east)."""
+    xs = [-2, -2, -2, 2, 2, -2, -2, 2, 2, 2]
+    ys = [-4, 0, 8, 10, 18, 20, 30, 30, 0, -4]
+    return drive(xs, ys)
+
+
+def test_drifting_onto_the_neighbour_line_is_measured_to_the_line_being_driven(
+    two_line_plan,
+) -> None:  # type: ignore[no-untyped-def]
+    # Measured to the nearest line the error could never exceed half the interval (2 m): the
+    # drift sits exactly on line 1. Measured to line 0, which the tractor was driving, it is
+    # the full 4 m, whether the intent is inferred from the track or known (simulator).
+    x, y = _drift_track(two_line_plan)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    t = np.arange(len(x)) * 0.1
+    inferred = score_track(two_line_plan, t, lon, lat)
+    assert inferred.cross_track_max_m > two_line_plan.interval_m / 2
+    assert inferred.cross_track_max_m == pytest.approx(4.0, abs=1e-3)
+    assert [s.line for s in inferred.stretches] == [0]
+    # The simulator's own knowledge: waypoint 2 (line 0's end) is steered to until y = 30.
+    leg = np.where(np.arange(len(x)) < np.argmax(y >= 30.0), 2, 4)
+    leg[: np.argmax(y >= 0.0)] = 1
+    known = score_track(two_line_plan, t, lon, lat, leg=leg)
+    assert known.cross_track_max_m == pytest.approx(4.0, abs=1e-3)
+
+
+def test_turns_are_scored_apart_from_lines(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    wx, wy = local_waypoints(two_line_plan)
+    # The turn at the far end bulges 1.5 m beyond the plan's straight turn.
+    xs = [wx[0], wx[1], wx[2], wx[2], wx[3], wx[3], wx[4], wx[5]]
+    ys = [wy[0], wy[1], wy[2], wy[2] + 1.5, wy[3] + 1.5, wy[3], wy[4], wy[5]]
+    x, y = drive(xs, ys)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    m = score_track(two_line_plan, np.arange(len(x)) * 0.1, lon, lat)
+    assert m.cross_track_max_m == pytest.approx(0.0, abs=1e-6)
+    assert m.turn_cross_track_max_m == pytest.approx(1.5, abs=1e-3)
+
+
+def test_a_live_track_has_no_error_for_waypoints_not_reached(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    wx, wy = local_waypoints(two_line_plan)
+    # Six fixes along the start leg and the first metres of line 0.
+    x = np.full(6, wx[0])
+    y = np.linspace(wy[0], wy[0] + 10.0, 6)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    m = score_track(two_line_plan, np.arange(6.0), lon, lat, live=True)
+    assert m.waypoint_errors_m[0] == pytest.approx(0.0, abs=1e-6)
+    assert m.waypoint_errors_m[2:] == (None, None, None, None)
+    assert m.waypoints_reached == 2
+    assert m.waypoint_error_max_m == pytest.approx(0.0, abs=1e-6)
+    assert 0.0 < m.plan_progress < 0.5
+    # What the driven part of the plan would till, the track tilled.
+    assert m.coverage_of_driven_ratio == pytest.approx(1.0, abs=0.05)
+    assert m.coverage_ratio < 0.3
+    # Scored as a finished upload instead, the far waypoints count as misses.
+    done = score_track(two_line_plan, np.arange(6.0), lon, lat)
+    assert done.waypoint_error_max_m > 20.0
+
+
+def test_coverage_uses_the_implement_width(two_line_plan) -> None:  # type: ignore[no-untyped-def]
+    import dataclasses
+
+    wx, wy = local_waypoints(two_line_plan)
+    x, y = drive(wx, wy)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    # A 1 m implement on lines 4 m apart tills a quarter of the field (the plan object of
+    # branch i9a carries implement_width_m; a stand-in with the attribute does too).
+    narrow = type(
+        "NarrowPlan",
+        (),
+        {k: getattr(two_line_plan, k) for k in ("field_lonlat", "waypoints", "segments", "stats")},
+    )()
+    narrow.interval_m = 4.0
+    narrow.implement_width_m = 1.0
+    m = score_track(narrow, np.arange(len(x)) * 0.1, lon, lat)  # type: ignore[arg-type]
+    assert m.implement_width_m == 1.0
+    assert m.coverage_ratio == pytest.approx(0.25, abs=0.02)
+    full = score_track(dataclasses.replace(two_line_plan), np.arange(len(x)) * 0.1, lon, lat)
+    assert full.coverage_ratio == pytest.approx(1.0, abs=0.01)
+
+
+@settings(max_examples=15, deadline=None)
+@given(offset=st.floats(min_value=0.0, max_value=3.6), side=st.sampled_from([-1.0, 1.0]))
+def test_a_track_offset_by_up_to_nearly_an_interval_is_measured_by_its_offset(
+    two_line_plan, offset: float, side: float
+) -> None:  # type: ignore[no-untyped-def]
+    # Both lines driven ``offset`` to one side (up to 0.9 of the 4 m interval, so past the
+    # neighbour's half): the error is the offset, not its distance to the nearest line.
+    wx, wy = local_waypoints(two_line_plan)
+    x, y = drive(wx + side * offset, wy, spacing=0.2)
+    lon, lat = track_lonlat(two_line_plan, x, y)
+    m = score_track(two_line_plan, np.arange(len(x)) * 0.1, lon, lat)
+    assert m.cross_track_max_m == pytest.approx(offset, abs=1e-3)

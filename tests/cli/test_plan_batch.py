@@ -1,0 +1,190 @@
+"""``tillpath plan-batch``: every field of a file planned on Dask, a bad field a row of its own."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pyogrio.raw
+import pytest
+import shapely
+from pyproj import Transformer
+
+from app.cli.batch import run_batch
+from app.cli.batch_read import BatchInputError, iter_field_chunks, open_fields
+from tests.conftest import FIELDS_DIR
+
+TILLPATH = [sys.executable, "-c", "from app.cli import main; main()"]
+#: A bow tie: self-intersecting, so the planner refuses it with a message.
+BOW_TIE = shapely.Polygon([(30.0, -2.0), (30.001, -2.001), (30.001, -2.0), (30.0, -2.001)])
+
+
+def rwanda_fields(n: int) -> list[dict[str, Any]]:
+    collection = json.loads((FIELDS_DIR / "rwanda_2021.geojson").read_text())
+    features: list[dict[str, Any]] = collection["features"][:n]
+    return features
+
+
+def write_gpkg(path: Path, geometries: list[Any], ids: list[str], names: list[Any]) -> None:
+    pyogrio.raw.write(
+        str(path),
+        geometry=np.array([None if g is None else shapely.to_wkb(g) for g in geometries]),
+        field_data=[np.array(ids, dtype=object), np.array(names, dtype=object)],
+        fields=["id", "name"],
+        driver="GPKG",
+        geometry_type="Polygon",
+        crs="EPSG:4326",
+    )
+
+
+def read_layer(path: Path, layer: str) -> tuple[list[Any], dict[str, list[Any]]]:
+    meta, _fids, geometry, data = pyogrio.raw.read(str(path), layer=layer)
+    return list(geometry), {
+        name: list(column) for name, column in zip(meta["fields"], data, strict=False)
+    }
+
+
+def test_one_invalid_field_is_reported_and_the_rest_are_planned(tmp_path: Path) -> None:
+    features = rwanda_fields(5)
+    geometries: list[Any] = [shapely.geometry.shape(f["geometry"]) for f in features]
+    geometries.insert(2, BOW_TIE)
+    ids = [str(f["properties"]["id"]) for f in features]
+    ids.insert(2, "bow-tie")
+    names = [f"field {i}" for i in range(6)]
+    fields = tmp_path / "fields.gpkg"
+    write_gpkg(fields, geometries, ids, names)
+    out = tmp_path / "out.gpkg"
+    result = subprocess.run(
+        [*TILLPATH, "plan-batch", str(fields), "-o", str(out), "--interval", "4", "--workers", "1"],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "6 fields, 5 planned, 1 failed" in result.stderr
+    _geoms, rows = read_layer(out, "fields")
+    by_id = dict(zip(rows["field_id"], range(6), strict=False))
+    assert sorted(rows["field_id"]) == sorted(ids)
+    bad = by_id["bow-tie"]
+    assert "self-intersect" in rows["error"][bad]
+    assert np.isnan(rows["path_length_m"][bad])
+    for ident in ids:
+        if ident == "bow-tie":
+            continue
+        i = by_id[ident]
+        assert rows["error"][i] is None
+        assert rows["line_count"][i] >= 1
+        assert 0.5 < rows["coverage_ratio"][i] <= 1.0
+        expected = next(f for f in features if str(f["properties"]["id"]) == ident)
+        area = expected["properties"]["area_m2"]
+        assert abs(rows["area_m2"][i] - area) / area < 0.01
+    paths, path_rows = read_layer(out, "paths")
+    assert sorted(path_rows["field_id"]) == sorted(i for i in ids if i != "bow-tie")
+    for wkb, length in zip(paths, path_rows["path_length_m"], strict=False):
+        line = shapely.from_wkb(wkb)
+        assert line.geom_type == "LineString" and len(line.coords) >= 2
+        assert length > 0
+
+
+def test_geoparquet_in_utm_and_a_zipped_shapefile_read_as_wgs84(tmp_path: Path) -> None:
+    features = rwanda_fields(3)
+    lonlat = [shapely.geometry.shape(f["geometry"]) for f in features]
+    to_utm = Transformer.from_crs(4326, 32736, always_xy=True)
+    utm = [
+        shapely.transform(g, lambda xy: np.column_stack(to_utm.transform(xy[:, 0], xy[:, 1])))
+        for g in lonlat
+    ]
+    crs = json.loads(Transformer.from_crs(32736, 32736).source_crs.to_json())  # PROJJSON
+    geo = {
+        "version": "1.1.0",
+        "primary_column": "geometry",
+        "columns": {"geometry": {"encoding": "WKB", "geometry_types": ["Polygon"], "crs": crs}},
+    }
+    table = pa.table(
+        {"id": ["a", "b", "c"], "geometry": [shapely.to_wkb(g) for g in utm]}
+    ).replace_schema_metadata({"geo": json.dumps(geo)})
+    parquet = tmp_path / "fields.parquet"
+    pq.write_table(table, parquet)
+
+    shp_dir = tmp_path / "shp"
+    shp_dir.mkdir()
+    write_gpkg(tmp_path / "tmp.gpkg", lonlat, ["a", "b", "c"], ["x", "y", "z"])
+    subprocess.run(
+        [
+            "ogr2ogr",
+            "-f",
+            "ESRI Shapefile",
+            str(shp_dir / "fields.shp"),
+            str(tmp_path / "tmp.gpkg"),
+        ],
+        check=True,
+    )
+    zipped = tmp_path / "fields.zip"
+    with zipfile.ZipFile(zipped, "w") as archive:
+        for part in shp_dir.iterdir():
+            archive.write(part, part.name)
+
+    for path in (parquet, zipped):
+        source = open_fields(path)
+        assert source.count == 3
+        chunks = list(iter_field_chunks(source, 2))
+        assert [len(c) for c in chunks] == [2, 1]
+        records = [r for c in chunks for r in c]
+        assert [r.ident for r in records] == ["a", "b", "c"]
+        for record, expected in zip(records, lonlat, strict=False):
+            assert record.wkb is not None
+            got = shapely.from_wkb(record.wkb)
+            assert got.symmetric_difference(expected).area < 1e-6 * expected.area
+
+
+def test_run_batch_streams_many_fields_on_a_cluster(tmp_path: Path, dask_scheduler: str) -> None:
+    # More fields than one read chunk and one write buffer, planned on the session's cluster.
+    squares = [shapely.box(10 + i * 1e-3, 50, 10 + i * 1e-3 + 4e-4, 50.0004) for i in range(2500)]
+    fields = tmp_path / "squares.gpkg"
+    write_gpkg(fields, squares, [f"s{i}" for i in range(2500)], [None] * 2500)
+    out = tmp_path / "out.gpkg"
+    rows, failed, _seconds = run_batch(
+        fields,
+        out,
+        options={"interval_m": 10.0},
+        scheduler=dask_scheduler,
+        workers=1,
+        per_task=64,
+        show_progress=False,
+    )
+    assert (rows, failed) == (2500, 0)
+    _geoms, data = read_layer(out, "fields")
+    assert sorted(data["field_index"]) == list(range(2500))
+    assert all(n >= 1 for n in data["line_count"])
+
+
+def test_unreadable_input_and_bad_output_are_errors_with_status_2(tmp_path: Path) -> None:
+    with pytest.raises(BatchInputError, match="does not exist"):
+        open_fields(tmp_path / "missing.gpkg")
+    text = tmp_path / "fields.txt"
+    text.write_text("not fields")
+    with pytest.raises(BatchInputError, match="not a known format"):
+        open_fields(text)
+    result = subprocess.run(
+        [*TILLPATH, "plan-batch", str(text), "-o", str(tmp_path / "out.csv")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2
+    assert result.stderr.startswith("error: -o: the output is a GeoPackage")
+    result = subprocess.run(
+        [*TILLPATH, "plan-batch", str(text), "-o", str(tmp_path / "out.gpkg")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2
+    assert result.stderr.startswith("error: FIELDS: fields.txt is not a known format")
