@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: run test bench install install-dev lint typecheck clean screenshot messages lock wheel
+.PHONY: run test bench soak install install-dev lint typecheck clean screenshot messages lock wheel
 
 # Python environment, exactly as locked (every transitive package pinned), rebuilt when the lock
 # changes; the project itself is installed without resolving anything. `make run` needs only the
@@ -62,6 +62,13 @@ test: install-dev
 bench: install-dev
 	command -v wrk >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -qq wrk; }
 	$(BIN)/python -m bench.run
+
+# The soak and fault suite for longer (make test runs it for a few seconds a test): a mixed
+# load on a real server on SQLite and PostgreSQL (TILLPATH_TEST_DATABASE_URL), killed and
+# restarted, and schemathesis with every phase. SOAK_S: seconds of load per test.
+SOAK_S ?= 120
+soak: install-dev
+	TILLPATH_SOAK_S=$(SOAK_S) $(BIN)/python -m pytest -m soak -p no:cacheprovider -s tests/soak
 
 lint: install-dev
 	$(BIN)/ruff check .

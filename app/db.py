@@ -4,23 +4,44 @@ One engine per database URL, cached for the process. SQLite gets WAL, foreign ke
 timeout on every connection, and SQLAlchemy's recipe for correct ``SAVEPOINT`` handling with
 pysqlite (the driver's own transaction handling would otherwise skip ``BEGIN``). Migrations are
 Alembic's, in ``migrations/`` beside ``alembic.ini`` at the top of the project.
+
+Writes are short and separate from reads (:func:`write`): a route reads what it needs, ends that
+read transaction (:func:`end_reads`, which also hands the connection back to the pool), computes
+(planning, scoring, simulating) with no connection held, and then stores the result in one write
+transaction of its own, retried when it races another writer. On SQLite that transaction starts
+with ``BEGIN IMMEDIATE``, so it waits for the write lock (the busy timeout) instead of failing
+with "database is locked" when a read transaction would have to become a write one.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import random
+import time
+from collections.abc import Callable, Iterator
 from functools import lru_cache
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Final, TypeVar
 
 from alembic import command
 from alembic.config import Config
 from fastapi import Depends
-from sqlalchemy import Connection, Engine, MetaData, create_engine, event
+from sqlalchemy import (
+    Connection,
+    CursorResult,
+    Engine,
+    MetaData,
+    create_engine,
+    delete,
+    event,
+    inspect,
+    select,
+)
 from sqlalchemy.engine import make_url
+from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import DeclarativeBase, Session
 from sqlalchemy.pool import NullPool
 
+from app.errors import ConflictError, DatabaseBusyError, NotFoundError
 from app.settings import Settings, get_settings
 
 #: Alembic's recommended constraint names, so that migrations can name what they drop.
@@ -33,7 +54,22 @@ NAMING_CONVENTION: dict[str, str] = {
 }
 
 #: How long a SQLite connection waits for another writer before giving up [ms].
-SQLITE_BUSY_TIMEOUT_MS = 5000
+SQLITE_BUSY_TIMEOUT_MS = 10_000
+#: Connections an engine keeps open, how many more it may open under load, and how long a
+#: request waits for one before the answer is 503 [s]. A request holds one only for its
+#: database work, so a pool this size serves the threads of one worker.
+POOL_SIZE: Final = 10
+POOL_MAX_OVERFLOW: Final = 20
+POOL_TIMEOUT_S: Final = 10.0
+#: Tries of a write transaction that races another writer, and the first back-off [s].
+WRITE_ATTEMPTS: Final = 4
+WRITE_BACKOFF_S: Final = 0.05
+#: Execution option that makes SQLite's next ``BEGIN`` a ``BEGIN IMMEDIATE``.
+_IMMEDIATE: Final = "tillpath_begin_immediate"
+#: SQLSTATEs of PostgreSQL errors that a retried transaction can overcome.
+_PG_RETRY_SQLSTATES: Final = frozenset({"40001", "40P01", "55P03"})
+
+T = TypeVar("T")
 
 
 class Base(DeclarativeBase):
@@ -66,6 +102,10 @@ def make_engine(url: str, **kwargs: Any) -> Engine:
     Engine
     """
     parsed = make_url(url)
+    if kwargs.get("poolclass") is None and parsed.database not in (None, "", ":memory:"):
+        kwargs.setdefault("pool_size", POOL_SIZE)
+        kwargs.setdefault("max_overflow", POOL_MAX_OVERFLOW)
+        kwargs.setdefault("pool_timeout", POOL_TIMEOUT_S)
     if parsed.get_backend_name() != "sqlite":
         kwargs.setdefault("pool_pre_ping", True)
         return create_engine(url, **kwargs)
@@ -89,7 +129,8 @@ def make_engine(url: str, **kwargs: Any) -> Engine:
 
     @event.listens_for(engine, "begin")
     def _sqlite_on_begin(connection: Connection) -> None:
-        connection.exec_driver_sql("BEGIN")
+        immediate = connection.get_execution_options().get(_IMMEDIATE, False)
+        connection.exec_driver_sql("BEGIN IMMEDIATE" if immediate else "BEGIN")
 
     return engine
 
@@ -111,6 +152,168 @@ def get_session(settings: Annotated[Settings, Depends(get_settings)]) -> Iterato
 
 
 SessionDep = Annotated[Session, Depends(get_session)]
+
+
+# --- short transactions --------------------------------------------------------------------
+
+
+def end_reads(session: Session) -> None:
+    """End the session's read transaction, if any, and hand its connection back to the pool.
+
+    Call it after loading what a computation needs and before computing: the connection is
+    then free for other requests, and SQLite holds no snapshot open. Nothing has been written,
+    so committing changes nothing; objects stay loaded (``expire_on_commit=False``).
+    """
+    if session.in_transaction():
+        session.commit()
+
+
+def is_transient(exc: BaseException) -> bool:
+    """Return True if ``exc`` is a write that lost a race and may succeed when retried.
+
+    SQLite's "database is locked"/"busy" (another writer held the lock past the busy timeout)
+    and PostgreSQL's serialization failures, deadlocks and lock timeouts.
+    """
+    if not isinstance(exc, DBAPIError):
+        return False
+    orig = exc.orig
+    if getattr(orig, "sqlstate", None) in _PG_RETRY_SQLSTATES:
+        return True
+    message = str(orig).lower()
+    return "database is locked" in message or "database is busy" in message
+
+
+def write(
+    session: Session,
+    work: Callable[[Session], T],
+    *,
+    parent: tuple[type[Base], int, str] | None = None,
+    attempts: int = WRITE_ATTEMPTS,
+) -> T:
+    """Run ``work`` in a write transaction of its own, commit it, and return what it returns.
+
+    The session's read transaction is ended first (:func:`end_reads`). On SQLite the write
+    starts with ``BEGIN IMMEDIATE``. A transaction that loses a race (see :func:`is_transient`)
+    is rolled back and run again, after a short random back-off; ``work`` must therefore make
+    its rows afresh each time it is called, from values read beforehand (a rollback expires
+    every row the session had loaded).
+
+    Parameters
+    ----------
+    session : Session
+    work : callable
+        ``work(session)`` adds or changes rows; it must not commit.
+    parent : (model, id, kind), optional
+        The row the new rows refer to (a run's plan, say). If the write fails on a foreign
+        key because that row was deleted meanwhile, the answer is ``<kind> <id> not found``.
+    attempts : int
+        Tries before giving up.
+
+    Returns
+    -------
+    object
+        What ``work`` returned.
+
+    Raises
+    ------
+    NotFoundError
+        If ``parent`` no longer exists.
+    ConflictError
+        If the write breaks another constraint (a concurrent change).
+    DatabaseBusyError
+        If the database stayed locked through every try (503 with ``Retry-After``).
+    """
+    end_reads(session)
+    for attempt in range(1, attempts + 1):
+        try:
+            session.connection(execution_options={_IMMEDIATE: True})
+            result = work(session)
+            session.commit()
+            return result
+        except IntegrityError as exc:
+            session.rollback()
+            if parent is not None and not _exists(session, *parent[:2]):
+                raise NotFoundError(parent[2], parent[1]) from exc
+            raise ConflictError(
+                "the request conflicts with a change made at the same time; read the object "
+                "again and retry"
+            ) from exc
+        except DBAPIError as exc:
+            session.rollback()
+            if not is_transient(exc):
+                raise
+            if attempt == attempts:
+                raise DatabaseBusyError() from exc
+            time.sleep(WRITE_BACKOFF_S * 2 ** (attempt - 1) * (0.5 + random.random()))
+        except BaseException:
+            session.rollback()
+            raise
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+RowT = TypeVar("RowT", bound="Base")
+
+
+def add_row(
+    session: Session, row: RowT, *, parent: tuple[type[Base], int, str] | None = None
+) -> RowT:
+    """Store the new ``row`` in a short write transaction (see :func:`write`); return it stored.
+
+    ``row`` is a template: each try adds a fresh copy of its column values (a rolled-back try
+    leaves its generated id on the object it added), and the stored copy is returned, loaded.
+    """
+
+    def work(s: Session) -> RowT:
+        fresh = copy_row(row)
+        s.add(fresh)
+        s.flush()
+        return fresh
+
+    return write(session, work, parent=parent)
+
+
+def copy_row(row: RowT) -> RowT:
+    """Return a new, unsaved row with ``row``'s column values but not its generated key."""
+    values = {
+        attr.key: getattr(row, attr.key)
+        for attr in inspect(type(row)).column_attrs
+        if getattr(row, attr.key) is not None
+        and not (attr.columns[0].primary_key and attr.columns[0].autoincrement is not False)
+    }
+    return type(row)(**values)
+
+
+def delete_row(session: Session, model: type[Base], ident: int, *, kind: str) -> None:
+    """Delete row ``ident`` of ``model`` (the database cascades to what refers to it).
+
+    One ``DELETE`` in a write transaction of its own: two requests deleting the same row at
+    once get 204 and 404, never an error.
+
+    Raises
+    ------
+    NotFoundError
+        If there is no such row (any more).
+    """
+    if not 1 <= ident <= 2**31 - 1:
+        raise NotFoundError(kind, ident)
+    primary_key = model.__mapper__.primary_key[0]
+
+    def work(s: Session) -> int:
+        result = s.execute(delete(model).where(primary_key == ident))
+        assert isinstance(result, CursorResult)
+        return result.rowcount
+
+    if write(session, work) == 0:
+        raise NotFoundError(kind, ident)
+    session.expunge_all()
+
+
+def _exists(session: Session, model: type[Base], ident: int) -> bool:
+    primary_key = model.__mapper__.primary_key[0]
+    try:
+        return session.scalar(select(primary_key).where(primary_key == ident)) is not None
+    finally:
+        end_reads(session)
 
 
 def project_root() -> Path:

@@ -12,9 +12,11 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Final
 
-from fastapi import FastAPI, Request
+from fastapi import FastAPI, HTTPException, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from sqlalchemy.exc import DataError, IntegrityError, OperationalError
+from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -107,6 +109,39 @@ class ThrottledError(PermissionError):
         self.headers = {"Retry-After": str(retry_after_s)}
 
 
+#: Seconds a client is asked to wait before retrying a 503 (``Retry-After``).
+RETRY_AFTER_S: Final = 2
+
+
+class ServerBusyError(RuntimeError):
+    """Every slot for heavy work (planning, simulating, scoring) is taken and the queue is full.
+
+    Parameters
+    ----------
+    what : str
+        The work that was refused (``simulation``, ``upload`` …).
+    """
+
+    def __init__(self, what: str) -> None:
+        super().__init__(
+            f"{what}: the server is busy with other work; try again in {RETRY_AFTER_S} s"
+        )
+        self.what = what
+
+
+class DatabaseBusyError(RuntimeError):
+    """The database stayed locked by other writers through every retry of a write."""
+
+    def __init__(self) -> None:
+        super().__init__(
+            f"database: busy with other writes; nothing was stored, try again in {RETRY_AFTER_S} s"
+        )
+
+
+class DatabaseUnavailableError(RuntimeError):
+    """The database could not be reached or gave no connection in time."""
+
+
 class UnavailableError(RuntimeError):
     """The server cannot do this now or in this setup (no job engine): 503."""
 
@@ -127,7 +162,23 @@ STATUS_CODES: Final[dict[type[Exception], int]] = {
     RequestValidationError: 422,
     NotFoundError: 404,
     BodyTooLargeError: 413,
+    ServerBusyError: 503,
+    DatabaseBusyError: 503,
+    DatabaseUnavailableError: 503,
+    # Safety nets for what the routes do not turn into one of the above themselves.
+    PoolTimeoutError: 503,
+    OperationalError: 503,
+    IntegrityError: 409,
+    DataError: 422,
     UnavailableError: 503,
+}
+
+#: What the client reads for the database's own errors (their text would leak SQL).
+_DATABASE_DETAILS: Final[dict[type[Exception], str]] = {
+    PoolTimeoutError: "database: every connection is in use; try again in {s} s",
+    OperationalError: "database: not reachable or busy; try again in {s} s",
+    IntegrityError: "the request conflicts with a change made at the same time; retry",
+    DataError: "body: holds a value the database cannot store (out of range or a NUL character)",
 }
 
 #: What FastAPI says when the body is not JSON it can decode (bad UTF-8, nesting too deep).
@@ -151,9 +202,17 @@ def error_response(exc: Exception, lang: str = DEFAULT_LANGUAGE) -> JSONResponse
         detail = format_validation_errors(exc.errors())
     else:
         detail = str(exc)
+    for cls, text in _DATABASE_DETAILS.items():
+        if isinstance(exc, cls):
+            logger.warning("database error answered %s: %s", status_for(exc), exc)
+            detail = text.format(s=RETRY_AFTER_S)
+            break
+    code = status_for(exc)
     headers: dict[str, str] | None = getattr(exc, "headers", None)
+    if code == 503:
+        headers = {**(headers or {}), "Retry-After": str(RETRY_AFTER_S)}
     return JSONResponse(
-        {"detail": translate_detail(detail, lang)}, status_code=status_for(exc), headers=headers
+        {"detail": translate_detail(detail, lang)}, status_code=code, headers=headers
     )
 
 
@@ -254,6 +313,8 @@ def _problem(error: Mapping[str, Any]) -> str:
         return "must be a JSON object sent as Content-Type: application/json"
     if kind in _TYPE_MESSAGES:
         return _TYPE_MESSAGES[kind]
+    if kind == "value_error" and ctx.get("error") is not None:
+        return str(ctx["error"])
     message = str(error.get("msg", "is not valid"))
     return message[:1].lower() + message[1:]
 
@@ -299,7 +360,9 @@ class BodySizeLimitMiddleware:
     A declared ``Content-Length`` over the limit is refused before anything is read. Otherwise
     the body is read (at most ``max_body_bytes`` of it) and counted as it streams in, so a
     chunked or lying request is refused as soon as it passes the limit; a body within the limit
-    is handed to the app unchanged.
+    is handed to the app unchanged. Uploads are not buffered here: they stream through to the
+    multipart parser (which spools files to disk past 1 MiB), counted on the way, and the
+    request fails with 413 the moment they pass ``upload_bytes``.
 
     Parameters
     ----------
@@ -346,6 +409,9 @@ class BodySizeLimitMiddleware:
         if _declared_length(scope) > limit:
             await error_response(too_large, _scope_language(scope))(scope, receive, send)
             return
+        if upload:
+            await self.app(scope, _counted(receive, limit, too_large), send)
+            return
 
         chunks: list[bytes] = []
         size = 0
@@ -372,6 +438,23 @@ class BodySizeLimitMiddleware:
             return await receive()
 
         await self.app(scope, replay, send)
+
+
+def _counted(receive: Receive, limit: int, too_large: BodyTooLargeError) -> Receive:
+    """Wrap ``receive`` so that a body passing ``limit`` bytes fails the request with 413."""
+    size = 0
+
+    async def counted() -> Message:
+        nonlocal size
+        message = await receive()
+        if message["type"] == "http.request":
+            size += len(message.get("body", b""))
+            if size > limit:
+                # Raised inside the app's body parsing: FastAPI passes HTTPException through.
+                raise HTTPException(status_code=413, detail=str(too_large))
+        return message
+
+    return counted
 
 
 def _scope_language(scope: Scope) -> str:

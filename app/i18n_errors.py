@@ -50,6 +50,17 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
     N_("is not valid"),
     N_("the request is larger than the limit of {limit} bytes"),
     N_("the upload is larger than the limit of {limit} bytes"),
+    # app/errors.py, app/db.py: a server under load, values a database cannot store
+    N_("the server is busy with other work; try again in {s} s"),
+    N_("busy with other writes; nothing was stored, try again in {s} s"),
+    N_("every connection is in use; try again in {s} s"),
+    N_("not reachable or busy; try again in {s} s"),
+    N_("the request conflicts with a change made at the same time; retry"),
+    N_(
+        "the request conflicts with a change made at the same time; read the object again and retry"
+    ),
+    N_("holds a value the database cannot store (out of range or a NUL character)"),
+    N_("must not contain control characters such as NUL"),
     # planner/validation.py: the field
     N_("must be a Polygon, not {kind}"),
     N_("polygon is empty"),
@@ -84,6 +95,15 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
     ),
     N_("has no usable fix ({why})"),
     N_("the CSV file is empty"),
+    N_("must lie between 1980 and 2100"),
+    N_("is {length} characters long; a time has at most {limit}"),
+    N_("heading_deg must be between -360 and 360, got {value}"),
+    N_("speed_mps must be between 0 and 100, got {value}"),
+    N_("GPX with a DTD, entity declarations or external references is refused"),
+    N_("is not a valid GPX file (its root element is <{name}>)"),
+    N_("is not well-formed XML ({why})"),
+    N_("a <trkpt> needs lat and lon"),
+    N_("{value} is not an ISO 8601 time"),
     # accounts (app/accounts.py, app/auth.py, app/errors.py)
     N_("username or password is wrong"),
     N_("too many failed sign-ins for this account; try again in about {minutes} minutes"),
@@ -104,10 +124,13 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
 )
 
 #: ``"<input>: "`` at the start of a detail: a JSON name, dotted or indexed (``start[0]``).
-_INPUT = re.compile(r"^(?P<input>[a-z_][a-z0-9_]*(?:\.[a-z0-9_]+|\[\d+\])*): (?P<rest>.+)$", re.S)
+#: A list body's errors start with the item's index (``[0].t``).
+_INPUT = re.compile(
+    r"^(?P<input>(?:[a-z_][a-z0-9_]*|\[\d+\])(?:\.[a-z0-9_]+|\[\d+\])*): (?P<rest>.+)$", re.S
+)
 _PLACEHOLDER = re.compile(r"\{([a-z_]+)\}")
 #: A placeholder's value: any text that does not run on into the next "; <input>: " sentence.
-_VALUE = r"(?:(?!; [a-z_][a-z0-9_.\[\]]*: ).)+?"
+_VALUE = r"(?:(?!; [a-z_\[][a-z0-9_.\[\]]*: ).)+?"
 _NUMBER = re.compile(r"^-?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?$")
 
 

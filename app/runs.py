@@ -3,9 +3,11 @@
 Thin adapters between the routes, :mod:`app.tracks` (file parsing), the ``runs`` and ``fixes``
 tables and :func:`navigation.score_track` (the same scoring as a simulation's).
 
-Fixes are inserted with ``INSERT … ON CONFLICT (run_id, t) DO NOTHING`` (SQLAlchemy's SQLite
-and PostgreSQL dialect inserts): a batch that arrives twice, late or out of order stores each
-timestamp once, and concurrent batches cannot race, since the database's unique key decides.
+Fixes are stored by :mod:`app.ingest` (``COPY`` on PostgreSQL, ``executemany`` on SQLite,
+both ending in ``ON CONFLICT (run_id, t) DO NOTHING``): a batch that arrives twice, late or out
+of order stores each timestamp once, and concurrent batches cannot race, since the database's
+unique key decides. Every write is a short transaction of its own (:func:`app.db.write`),
+after the parsing and before the scoring.
 """
 
 from __future__ import annotations
@@ -18,10 +20,11 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 from sqlalchemy import func, select
-from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
+from app import ingest
 from app.auth import Access, owned
+from app.db import add_row, end_reads, write
 from app.errors import ConflictError, NotFoundError
 from app.missed import missed_ground_geojson, plan_follow_up
 from app.models import Fix, Plan, Run
@@ -39,8 +42,9 @@ from app.tracks import (
     ParsedTrack,
     TrackFix,
     TrackFormatError,
+    TrackStream,
+    check_not_empty,
     parse_time,
-    sort_fixes,
     us_to_datetime,
 )
 from navigation import TrackMetrics, score_track
@@ -53,6 +57,8 @@ FloatArray = npt.NDArray[np.float64]
 INSERT_CHUNK_ROWS: Final = 3000
 #: Most vertices of the track returned for display.
 MAX_TRACK_POINTS: Final = 20_000
+#: Rows fetched from the driver at a time when a run's track is loaded.
+_LOAD_BLOCK_ROWS: Final = 50_000
 #: Default cross-track error threshold of the reported stretches [m].
 DEFAULT_THRESHOLD_M: Final = 1.0
 
@@ -92,32 +98,6 @@ class RunTrack:
 # --- storing -------------------------------------------------------------------------------
 
 
-def _insert(session: Session) -> Any:
-    dialect = session.get_bind().dialect.name
-    if dialect == "postgresql":
-        return postgresql.insert
-    if dialect == "sqlite":
-        return sqlite.insert
-    raise NotImplementedError(f"fixes: no ON CONFLICT insert for the {dialect} dialect")
-
-
-def _rows(run_id: int, fixes: Sequence[TrackFix]) -> list[dict[str, Any]]:
-    return [
-        {
-            "run_id": run_id,
-            "t": f.t,
-            "lat": f.lat,
-            "lon": f.lon,
-            "heading_deg": f.heading_deg,
-            "speed_mps": f.speed_mps,
-            "quality": f.quality,
-            "hdop": f.hdop,
-            "satellites": f.satellites,
-        }
-        for f in fixes
-    ]
-
-
 def insert_fixes(session: Session, run_id: int, fixes: Sequence[TrackFix]) -> int:
     """Insert ``fixes`` into run ``run_id``, skipping timestamps it already has.
 
@@ -135,75 +115,88 @@ def insert_fixes(session: Session, run_id: int, fixes: Sequence[TrackFix]) -> in
     int
         How many fixes were new.
     """
-    fixes, _ = sort_fixes(fixes)
-    if not fixes:
-        return 0
-    stmt = (
-        _insert(session)(Fix)
-        .on_conflict_do_nothing(index_elements=["run_id", "t"])
-        .returning(Fix.t)
-    )
-    # One executemany: SQLAlchemy sends it as multi-row INSERTs ("insertmanyvalues") and
-    # RETURNING gives back the rows that were new, not those already there.
-    result = session.execute(
-        stmt,
-        _rows(run_id, fixes),
-        execution_options={"insertmanyvalues_page_size": INSERT_CHUNK_ROWS},
-    )
-    stored = len(result.all())
-    return stored
+    return ingest.store_fixes(session, run_id, ingest.collect(fixes))
+
+
+def read_upload(stream: TrackStream) -> tuple[ingest.FixColumns, dict[str, Any]]:
+    """Parse an upload's fixes into columns and its import report; nothing is written.
+
+    Raises
+    ------
+    TrackFormatError
+        For a malformed file or one with no usable fix.
+    """
+    columns = ingest.collect(stream.fixes)
+    check_not_empty(stream.format, len(columns), stream.report)
+    return columns, json_ready(stream.summary(len(columns), columns.duplicates))
+
+
+def create_run_from_columns(
+    session: Session,
+    plan: Plan,
+    fixes: ingest.FixColumns,
+    *,
+    source: str,
+    report: dict[str, Any],
+    name: str | None,
+) -> Run:
+    """Store an uploaded track as a new run of ``plan``: one write transaction, all or nothing.
+
+    Raises
+    ------
+    NotFoundError
+        If the plan was deleted meanwhile.
+    """
+    # Read now: a rolled-back try expires the loaded rows.
+    plan_id, organisation_id = plan.id, plan.organisation_id
+
+    def work(s: Session) -> Run:
+        run = Run(
+            plan_id=plan_id,
+            organisation_id=organisation_id,
+            name=name,
+            source=source,
+            import_report=report,
+        )
+        s.add(run)
+        s.flush()
+        ingest.store_fixes(s, run.id, fixes, new_run=True)
+        return run
+
+    return write(session, work, parent=(Plan, plan_id, "plan"))
 
 
 def create_run_from_track(
     session: Session, plan: Plan, track: ParsedTrack, *, name: str | None
 ) -> Run:
-    """Store an uploaded track as a new run of ``plan``, all or nothing, and commit.
-
-    Parameters
-    ----------
-    session : Session
-    plan : Plan
-        A stored plan.
-    track : ParsedTrack
-        The parsed file (at least one fix).
-    name : str or None
-        The file's name.
-
-    Returns
-    -------
-    Run
-    """
-    run = Run(
-        plan_id=plan.id,
-        organisation_id=plan.organisation_id,
-        name=name,
+    """Store a parsed track as a new run of ``plan``, all or nothing, and commit."""
+    return create_run_from_columns(
+        session,
+        plan,
+        ingest.collect(track.fixes),
         source=track.format,
-        import_report=json_ready(track.report),
+        report=json_ready(track.report),
+        name=name,
     )
-    _end_read_transaction(session)
-    try:
-        session.add(run)
-        session.flush()
-        insert_fixes(session, run.id, track.fixes)
-        session.commit()
-    except BaseException:
-        session.rollback()
-        raise
-    return run
 
 
 def create_live_run(session: Session, plan: Plan, *, name: str | None) -> Run:
     """Create an empty live run of ``plan`` (fixes come later) and commit."""
-    run = Run(
-        plan_id=plan.id,
-        organisation_id=plan.organisation_id,
-        name=name,
-        source="live",
-        import_report={},
-    )
-    session.add(run)
-    session.commit()
-    return run
+    plan_id, organisation_id = plan.id, plan.organisation_id
+
+    def work(s: Session) -> Run:
+        run = Run(
+            plan_id=plan_id,
+            organisation_id=organisation_id,
+            name=name,
+            source="live",
+            import_report={},
+        )
+        s.add(run)
+        s.flush()
+        return run
+
+    return write(session, work, parent=(Plan, plan_id, "plan"))
 
 
 def add_fixes(session: Session, run: Run, fixes_in: Sequence[FixIn]) -> tuple[int, int]:
@@ -238,26 +231,12 @@ def add_fixes(session: Session, run: Run, fixes_in: Sequence[FixIn]) -> tuple[in
         )
         for i, f in enumerate(fixes_in)
     ]
-    _end_read_transaction(session)
-    try:
-        stored = insert_fixes(session, run.id, fixes)
-        session.commit()
-    except BaseException:
-        session.rollback()
-        raise
-    return stored, count_fixes(session, run.id)
-
-
-def _end_read_transaction(session: Session) -> None:
-    """End the transaction of the reads so far, so the writes start a transaction of their own.
-
-    SQLite cannot turn a read transaction into a write one while another connection writes: it
-    fails at once with "database is locked" instead of waiting (that could deadlock). A
-    transaction whose first statement writes waits for the lock (the busy timeout). Nothing
-    has been written yet, so nothing is committed here.
-    """
-    if session.in_transaction():
-        session.commit()
+    columns = ingest.collect(fixes)
+    run_id = run.id
+    stored = write(
+        session, lambda s: ingest.store_fixes(s, run_id, columns), parent=(Run, run_id, "run")
+    )
+    return stored, count_fixes(session, run_id)
 
 
 # --- reading -------------------------------------------------------------------------------
@@ -287,29 +266,42 @@ def load_track(session: Session, run_id: int) -> RunTrack:
     for a day's log. Times (µs since 1970, below 2**53 until the year 2255) pass through a
     float64 array exactly.
     """
-    dbapi_connection = session.connection().connection.dbapi_connection
+    connection = session.connection()
+    dbapi_connection = connection.connection.dbapi_connection
     assert dbapi_connection is not None
-    cursor = dbapi_connection.cursor()
+    # On PostgreSQL a named (server-side) cursor, so the client holds one block at a time.
+    postgres = connection.dialect.name == "postgresql"
+    cursor: Any = (
+        dbapi_connection.cursor(name="tillpath_load_track")
+        if postgres
+        else dbapi_connection.cursor()
+    )
     try:
         # ``run_id`` is an int: formatting it in is safe, and spares the two paramstyles.
         cursor.execute(
             "SELECT t, lon, lat, heading_deg, speed_mps, hdop, satellites, quality FROM fixes "
             f"WHERE run_id = {int(run_id)} ORDER BY t"
         )
-        rows = cursor.fetchall()
+        # In blocks: the driver's row tuples of a whole day's log would take ~250 bytes a fix.
+        blocks = []
+        quality: list[str | None] = []
+        while rows := cursor.fetchmany(_LOAD_BLOCK_ROWS):
+            blocks.append(np.array([row[:7] for row in rows], dtype=np.float64))  # None -> nan
+            quality.extend(row[7] for row in rows)
     finally:
         cursor.close()
-    if not rows:
+    if not blocks:
         empty = np.array([], dtype=float)
         return RunTrack(np.array([], dtype=np.int64), empty, empty, empty, empty)
-    table = np.array([row[:7] for row in rows], dtype=np.float64)  # None -> nan
+    table = blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
+    del blocks
     return RunTrack(
         t=table[:, 0].astype(np.int64),
         lon=table[:, 1],
         lat=table[:, 2],
         heading_deg=table[:, 3],
         speed_mps=table[:, 4],
-        quality=[row[7] for row in rows],
+        quality=quality,
         hdop=table[:, 5],
         satellites=table[:, 6],
     )
@@ -374,6 +366,7 @@ def run_view(
     if plan is None:  # deleted meanwhile: the run went with it
         raise NotFoundError("run", run.id)
     track = load_track(session, run.id)
+    end_reads(session)  # no connection held while scoring
     metrics = score_run(plan, track, threshold_m=threshold_m, live=run.source == "live")
     n = len(track.t)
     view: dict[str, Any] = {
@@ -448,15 +441,9 @@ def follow_up_plan(session: Session, run: Run, *, budget_s: float) -> Plan:
     track = load_track(session, run.id)
     if len(track.t) == 0:
         raise ConflictError(f"run {run.id}: has no fix yet; there is no missed ground to plan")
+    end_reads(session)  # no connection held while planning
     follow_up = plan_follow_up(plan, track, run_id=run.id, budget_s=budget_s)
-    _end_read_transaction(session)
-    try:
-        session.add(follow_up)
-        session.commit()
-    except BaseException:
-        session.rollback()
-        raise
-    return follow_up
+    return add_row(session, follow_up, parent=(Plan, plan.id, "plan"))
 
 
 def _stretch_dict(stretch: Any) -> dict[str, Any]:

@@ -13,6 +13,17 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from app.models import PLAN_NAME_MAX_LENGTH
+from app.tracks import MAX_HEADING_DEG, MAX_SPEED_MPS, MAX_TIME_TEXT, check_text
+
+
+def _no_control(value: str | None) -> str | None:
+    if value is not None:
+        check_text(value)
+    return value
+
+
+#: A name as stored: no NUL or other control characters (PostgreSQL cannot store NUL).
+NameText = Annotated[str | None, AfterValidator(_no_control)]
 
 Objective = Literal["shortest_path", "fewest_lines"]
 Pattern = Literal["boustrophedon", "snake", "spiral"]
@@ -65,7 +76,7 @@ class PlanCreate(BaseModel):
         },
     )
 
-    name: StoredText | None = Field(
+    name: NameText = Field(
         default=None,
         max_length=PLAN_NAME_MAX_LENGTH,
         description="Plan name; default: the field's `name` property, if any.",
@@ -327,11 +338,23 @@ class FixIn(BaseModel):
         },
     )
 
-    t: float | str = Field(description="Time: ISO 8601 (UTC if no offset) or Unix epoch seconds.")
+    t: float | str = Field(
+        description=(
+            "Time: ISO 8601 (UTC if no offset) or Unix epoch seconds, 1980–2100; text of at "
+            f"most {MAX_TIME_TEXT} characters."
+        )
+    )
     lat: float = Field(ge=-90, le=90, description="Latitude, WGS84 [deg].")
     lon: float = Field(ge=-180, le=180, description="Longitude, WGS84 [deg].")
-    heading_deg: float | None = Field(default=None, description="Heading from true north [deg].")
-    speed_mps: float | None = Field(default=None, description="Speed over ground [m/s].")
+    heading_deg: float | None = Field(
+        default=None,
+        ge=-MAX_HEADING_DEG,
+        le=MAX_HEADING_DEG,
+        description="Heading from true north [deg], -360 to 360.",
+    )
+    speed_mps: float | None = Field(
+        default=None, ge=0, le=MAX_SPEED_MPS, description="Speed over ground [m/s], 0–100."
+    )
     quality: Literal["rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning"] | None = Field(
         default=None, description="Fix quality, as the receiver reported it."
     )
@@ -387,6 +410,11 @@ class RunRead(RunSummary):
     started_at: dt.datetime | None = Field(description="Time of the first fix.")
     last_fix: LastFix | None
     metrics: MetricsRead | None = Field(description="Null while the run has no fix.")
+    metrics_fix_count: int | None = Field(
+        default=None,
+        description="Fixes that `metrics` and `stretches` cover: a read with `since` answers "
+        "the last figures computed, which may lag a live run by a few seconds.",
+    )
     track: dict[str, Any] | None = Field(
         description="GeoJSON LineString Feature of the fixes (thinned to at most 20,000 "
         "vertices for display), `time_s` per vertex from the first fix."

@@ -36,6 +36,7 @@ from app.schemas import (
     SimulationList,
     SimulationSummary,
 )
+from app.tracks import check_text
 from navigation import GuidanceParams, SimulationConfig, simulate
 from navigation.export import simulation_to_geojson
 from planner.export import (
@@ -121,6 +122,10 @@ def plan_field(body: PlanCreate, *, budget_s: float = DEFAULT_PLANNING_BUDGET_S)
     name = (body.name or "").strip() or (spec.name or "").strip() or None
     if name is not None:
         name = name[:PLAN_NAME_MAX_LENGTH]
+        try:
+            check_text(name)
+        except ValueError as exc:  # the field file's name: PostgreSQL cannot store a NUL
+            raise planner.InvalidParameterError("name", str(exc)) from None
     request: dict[str, Any] = {
         "name": name,
         "field": polygon_to_geojson(spec.field_lonlat),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from functools import lru_cache
 
 from pydantic import Field
@@ -31,7 +32,24 @@ class Settings(BaseSettings):
         Largest request body accepted [bytes]; larger ones get 413.
     max_upload_bytes : int
         Largest track file accepted by ``POST /api/plans/{id}/runs`` [bytes] (a 6-hour u-blox
-        NMEA log at 5 Hz is about 20 MB); larger ones get 413.
+        NMEA log at 5 Hz is about 20 MB, a 6-hour 10 Hz CSV about 12 MB); larger ones get 413.
+        Uploads are read as a stream, so memory does not grow with this limit.
+    heavy_work_slots : int
+        Plans, simulations, uploads and run scorings computed at once per worker process
+        (default: the number of CPU cores).
+    heavy_work_queue : int
+        Further such requests that wait for a slot; more are answered 503 with ``Retry-After``.
+    heavy_work_wait_s : float
+        Longest wait for a slot [s]; then 503 with ``Retry-After``.
+    header_timeout_s, body_idle_timeout_s : float
+        ``tillpath serve`` closes a connection whose request line and headers take longer than
+        this to arrive, or whose body stops arriving for this long [s].
+    keep_alive_s : int
+        Idle keep-alive connections are closed after this long [s].
+    limit_concurrency : int
+        Connections and requests a worker serves at once; more get 503 at once.
+    backlog : int
+        Connections the operating system queues before the server accepts them.
     planning_budget_s : float
         Longest a large field (hundreds of vertices, many holes) may take to plan in one
         request [s]; longer gets 422 naming the limit (:mod:`app.budget`).
@@ -50,7 +68,15 @@ class Settings(BaseSettings):
     satellite_tile_url: str = ESRI_WORLD_IMAGERY_URL
     street_tile_url: str = OSM_TILE_URL
     max_body_bytes: int = Field(default=2 * 1024 * 1024, ge=1)
-    max_upload_bytes: int = Field(default=64 * 1024 * 1024, ge=1)
+    max_upload_bytes: int = Field(default=32 * 1024 * 1024, ge=1)
+    heavy_work_slots: int = Field(default=max(2, os.cpu_count() or 2), ge=1, le=1024)
+    heavy_work_queue: int = Field(default=16, ge=0, le=10_000)
+    heavy_work_wait_s: float = Field(default=10.0, ge=0, le=600)
+    header_timeout_s: float = Field(default=10.0, gt=0, le=3600)
+    body_idle_timeout_s: float = Field(default=30.0, gt=0, le=3600)
+    keep_alive_s: int = Field(default=5, ge=1, le=3600)
+    limit_concurrency: int = Field(default=200, ge=1, le=100_000)
+    backlog: int = Field(default=256, ge=1, le=65_535)
     planning_budget_s: float = Field(default=1.5, gt=0, le=600)
     secure_cookies: bool = False
     dask_scheduler: str | None = None

@@ -8,6 +8,7 @@ outside), and the PostgreSQL tests and benchmarks a database they may create and
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -136,6 +137,108 @@ def tillpath_command() -> list[str]:
     return [sys.executable, "-c", "from app.cli import main; main()"]
 
 
+class ServerProcess:
+    """``tillpath serve`` on a loopback port, as a child process that can be killed and restarted.
+
+    Parameters
+    ----------
+    database_url : str
+        ``TILLPATH_DATABASE_URL`` of the server (it migrates it on start).
+    log : Path, optional
+        Where the server's output goes (appended to; discarded if None).
+    serve_args : sequence of str
+        More ``tillpath serve`` options, e.g. ``("--workers", "2")``.
+    env : mapping, optional
+        More environment variables (``TILLPATH_*`` settings).
+    first_account : bool
+        Give the database its first account on the first start; without it the server asks
+        for one (``base_url.account`` then names an account that does not exist).
+    """
+
+    def __init__(
+        self,
+        database_url: str,
+        *,
+        log: Path | None = None,
+        serve_args: Sequence[str] = (),
+        env: Mapping[str, str] | None = None,
+        first_account: bool = True,
+    ) -> None:
+        self.database_url = database_url
+        self.first_account = first_account
+        self.log = log
+        self.serve_args = tuple(serve_args)
+        self.env = dict(env or {})
+        self.port = free_port()
+        self.process: subprocess.Popen[bytes] | None = None
+        self.account: Account | None = None
+
+    @property
+    def base_url(self) -> ServerUrl:
+        """``http://127.0.0.1:<port>``, with the first account (``.headers``) once started."""
+        assert self.account is not None, "not started"
+        return ServerUrl(f"http://127.0.0.1:{self.port}", self.account)
+
+    @property
+    def pid(self) -> int:
+        """The server's process id (the uvicorn master with several workers)."""
+        assert self.process is not None, "not started"
+        return self.process.pid
+
+    def start(self, *, timeout_s: float = 60.0) -> ServerUrl:
+        """Start the server (on the same port as before, if restarted); return its base URL.
+
+        The first start migrates the database and adds a first account (:func:`seed_account`)
+        to it; the URL carries that account.
+
+        Raises
+        ------
+        ServerStartError
+            If it exits or does not answer ``/api/health`` within ``timeout_s``.
+        """
+        if self.account is None:
+            self.account = (
+                seed_account(self.database_url)
+                if self.first_account
+                else Account(TEST_USERNAME, TEST_PASSWORD, 0, "tp_no-account-yet")
+            )
+        env = {
+            **os.environ,
+            "TILLPATH_DATABASE_URL": self.database_url,
+            "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
+            "TILLPATH_STREET_TILE_URL": NO_TILES,
+            **self.env,
+        }
+        command = [
+            *tillpath_command(),
+            "serve",
+            *("--host", "127.0.0.1", "--port", str(self.port)),
+            *self.serve_args,
+        ]
+        with self.log.open("ab") if self.log else open(os.devnull, "wb") as out:
+            self.process = subprocess.Popen(
+                command, cwd=REPO, env=env, stdout=out, stderr=out, start_new_session=True
+            )
+        _wait_for_health(f"{self.base_url}/api/health", self.process, self.log, timeout_s)
+        return self.base_url
+
+    def kill(self) -> None:
+        """Kill the server and its workers at once (SIGKILL), as a power cut would."""
+        if self.process is not None and self.process.poll() is None:
+            os.killpg(self.process.pid, signal.SIGKILL)
+            self.process.wait()
+
+    def stop(self) -> None:
+        """Stop the server gracefully (SIGTERM), killing it if it does not exit in 15 s."""
+        if self.process is None or self.process.poll() is not None:
+            return
+        self.process.terminate()
+        try:
+            self.process.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            self.kill()
+
+
 @contextmanager
 def running_server(
     database_url: str,
@@ -172,38 +275,15 @@ def running_server(
     ServerStartError
         If the server exits or does not answer in time (with its log, if kept).
     """
-    account = (
-        seed_account(database_url)
-        if first_account
-        else Account(TEST_USERNAME, TEST_PASSWORD, 0, "tp_no-account-yet")
+    if log is not None:
+        log.write_bytes(b"")
+    server = ServerProcess(
+        database_url, log=log, serve_args=serve_args, env=env, first_account=first_account
     )
-    port = free_port()
-    base = ServerUrl(f"http://127.0.0.1:{port}", account)
-    env = {
-        **os.environ,
-        "TILLPATH_DATABASE_URL": database_url,
-        "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
-        "TILLPATH_STREET_TILE_URL": NO_TILES,
-        **(env or {}),
-    }
-    command = [
-        *tillpath_command(),
-        "serve",
-        *("--host", "127.0.0.1", "--port", str(port)),
-        *serve_args,
-    ]
-    with log.open("wb") if log else open(os.devnull, "wb") as out:
-        process = subprocess.Popen(command, cwd=REPO, env=env, stdout=out, stderr=out)
     try:
-        _wait_for_health(f"{base}/api/health", process, log, timeout_s)
-        yield base
+        yield server.start(timeout_s=timeout_s)
     finally:
-        process.terminate()
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+        server.stop()
 
 
 def _wait_for_health(

@@ -7,9 +7,9 @@ unicsv, RTKLIB .pos, u-blox UBX and KML tracks are read by :mod:`app.track_forma
 Formats
 -------
 - **GPX 1.0/1.1**: the first ``<trk>`` that has timed points (all its segments); points without
-  a time are dropped and counted. The XML is checked with defusedxml first: a DTD, entity
-  declarations (the "billion laughs" bomb) or external references are refused before gpxpy
-  parses anything.
+  a time are dropped and counted. The XML is read incrementally by defusedxml's ``iterparse``
+  (expat), one point at a time: a DTD, entity declarations (the "billion laughs" bomb) or
+  external references are refused as soon as they appear.
 - **CSV**: a header naming ``time``, ``lat``, ``lon`` and optionally ``heading_deg`` and
   ``speed_mps`` (``heading`` and ``speed`` are accepted too), in any order. Times are ISO 8601
   (``2026-11-22T03:14:15.2Z``; without an offset, UTC) or Unix epoch seconds. A row that cannot
@@ -20,6 +20,8 @@ Formats
   (no fix) are dropped and counted. GGA has no date: the date comes from the last RMC before it
   (for fixes before the first RMC, counted back from that one), and a time of day that falls
   back by more than 12 h means midnight passed.
+
+Every reader streams (:func:`read_track`): memory holds a line or a point, never the file.
 
 Timestamps are integers, microseconds since the Unix epoch (UTC): equal times written
 differently (``…T00:00:01.500Z`` and ``1767225601.5``) become the same fix.
@@ -32,17 +34,14 @@ import datetime as dt
 import io
 import math
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
-from typing import Any, Final
+from typing import Any, BinaryIO, Final
 
-import gpxpy
-import gpxpy.gpx
+import defusedxml.ElementTree
 import pynmea2
-
-from planner.errors import UnreadableFileError
-from planner.io.safety import check_xml
+from defusedxml import DefusedXmlException
 
 #: The formats :func:`parse_track` reads.
 TRACK_FORMATS: Final = ("gpx", "csv", "nmea")
@@ -50,6 +49,11 @@ TRACK_FORMATS: Final = ("gpx", "csv", "nmea")
 #: Earliest and latest times accepted: the GPS epoch (1980-01-06) to 2100 [µs since 1970].
 MIN_TIME_US: Final = 315_964_800 * 1_000_000
 MAX_TIME_US: Final = 4_102_444_800 * 1_000_000
+
+#: Bounds of a fix's heading [deg] and speed [m/s] (360 km/h: no tractor, nor a GPS glitch
+#: worth storing, goes faster).
+MAX_HEADING_DEG: Final = 360.0
+MAX_SPEED_MPS: Final = 100.0
 
 _EPOCH: Final = dt.datetime(1970, 1, 1, tzinfo=dt.UTC)
 _MICROSECOND: Final = dt.timedelta(microseconds=1)
@@ -181,6 +185,8 @@ def us_to_datetime(t: int) -> dt.datetime:
 
 #: Longest text read as a time [characters] (ISO 8601 with nanoseconds and an offset is 35).
 MAX_TIME_TEXT_LENGTH = 64
+#: The same, under the name the schemas and the readers use.
+MAX_TIME_TEXT: Final = MAX_TIME_TEXT_LENGTH
 #: Epoch seconds of 1980–2100 have 10 digits before the point: ``Decimal.adjusted()`` ≤ 9.
 MAX_EPOCH_DIGITS = 9
 
@@ -258,6 +264,41 @@ def _epoch_us(seconds: Decimal, input_name: str) -> int:
     if seconds and seconds.adjusted() > MAX_EPOCH_DIGITS:
         raise TrackFormatError(input_name, "must lie between 1980 and 2100")
     return int(round(seconds * 1_000_000))
+
+
+def check_text(value: str, *, input_name: str | None = None) -> str:
+    """Refuse text with a NUL or another control character (tab excepted); return it.
+
+    Raises
+    ------
+    ValueError
+        ``must not contain control characters such as NUL``; a :class:`TrackFormatError`
+        naming ``input_name`` if given.
+
+    Examples
+    --------
+    >>> check_text("Sawah 3")
+    'Sawah 3'
+    """
+    if any(ord(c) < 32 and c != "\t" or ord(c) == 127 for c in value):
+        problem = "must not contain control characters such as NUL"
+        if input_name is not None:
+            raise TrackFormatError(input_name, problem)
+        raise ValueError(problem)
+    return value
+
+
+def check_motion(heading_deg: float | None, speed_mps: float | None, *, input_name: str) -> None:
+    """Raise :class:`TrackFormatError` unless heading and speed (where given) are in range.
+
+    Heading within ±:data:`MAX_HEADING_DEG`, speed within 0–:data:`MAX_SPEED_MPS`.
+    """
+    if heading_deg is not None and not abs(heading_deg) <= MAX_HEADING_DEG:
+        raise TrackFormatError(
+            input_name, f"heading_deg must be between -360 and 360, got {heading_deg}"
+        )
+    if speed_mps is not None and not 0.0 <= speed_mps <= MAX_SPEED_MPS:
+        raise TrackFormatError(input_name, f"speed_mps must be between 0 and 100, got {speed_mps}")
 
 
 def check_position(lat: float, lon: float, *, input_name: str) -> None:
@@ -343,80 +384,206 @@ def parse_track(data: bytes) -> ParsedTrack:
         For an unknown format, a malformed file, XML with a DTD or entities, or a file with no
         usable fix.
     """
+    stream = read_track(io.BytesIO(data))
+    fixes, duplicates = sort_fixes(stream.fixes)
+    return stream.parsed(fixes, duplicates)
+
+
+@dataclass(slots=True)
+class TrackStream:
+    """A track file being read: its format, its fixes as they are read, and the report.
+
+    Attributes
+    ----------
+    format : str
+        ``gpx``, ``csv`` or ``nmea``.
+    fixes : iterator of TrackFix
+        In file order; consuming it may raise :class:`TrackFormatError`.
+    report : dict
+        Filled in while ``fixes`` is consumed (see :class:`ParsedTrack`).
+    """
+
+    format: str
+    fixes: Iterator[TrackFix]
+    report: dict[str, Any]
+
+    def parsed(self, fixes: list[TrackFix], duplicates: int) -> ParsedTrack:
+        """Wrap the sorted, de-duplicated ``fixes`` as a :class:`ParsedTrack`."""
+        check_not_empty(self.format, len(fixes), self.report)
+        return ParsedTrack(
+            format=self.format, fixes=fixes, report=self.summary(len(fixes), duplicates)
+        )
+
+    def summary(self, count: int, duplicates: int) -> dict[str, Any]:
+        """Return the import report: ``count`` fixes kept, ``duplicates`` dropped."""
+        return {"format": self.format, "fixes": count, "duplicate_times": duplicates, **self.report}
+
+
+#: Bytes read ahead to tell the format.
+_HEAD_BYTES: Final = 64 * 1024
+
+
+def read_track(stream: BinaryIO) -> TrackStream:
+    """Start reading a track file from a seekable binary stream, one line or element at a time.
+
+    Memory stays bounded whatever the file's size: CSV and NMEA are read line by line, GPX
+    with an incremental XML parser (defusedxml, no DTD or entities) that drops each point once
+    read. Nothing is sorted here (see :func:`sort_fixes`).
+
+    Parameters
+    ----------
+    stream : binary file
+        Positioned at the start; must be seekable (the head is read twice).
+
+    Returns
+    -------
+    TrackStream
+
+    Raises
+    ------
+    TrackFormatError
+        If the format is none of GPX, CSV and NMEA (the fixes raise it for a malformed file).
+    """
     from app.track_formats import EXTRA_TRACK_FORMATS, detect_extra_format, read_extra_format
 
-    text = data.decode("utf-8", errors="replace")
-    fmt = detect_extra_format(data) or detect_format(text)
-    if fmt in EXTRA_TRACK_FORMATS:
-        fixes, report = read_extra_format(fmt, data)
-    elif fmt == "gpx":
-        fixes, report = _read_gpx(data)
-    elif fmt == "nmea":
-        fixes, report = _read_nmea(text)
-    elif fmt == "csv":
-        fixes, report = _read_csv(text)
-    else:
-        raise TrackFormatError(
-            "file",
-            "is not a track file tillpath can read: expected GPX, KML, CSV with a "
-            "time,lat,lon header, gpsbabel unicsv, RTKLIB .pos, u-blox UBX or an NMEA 0183 log",
-        )
-    fixes, duplicates = sort_fixes(fixes)
-    if not fixes:
-        details = ", ".join(f"{k.replace('_', ' ')}: {v}" for k, v in report.items() if v)
-        raise TrackFormatError(
-            "file", f"has no usable fix ({fmt.upper()}{'; ' + details if details else ''})"
-        )
-    return ParsedTrack(
-        format=fmt,
-        fixes=fixes,
-        report={"format": fmt, "fixes": len(fixes), "duplicate_times": duplicates, **report},
+    head_bytes = stream.read(_HEAD_BYTES)
+    stream.seek(0)
+    fmt = detect_extra_format(head_bytes) or detect_format(
+        head_bytes.decode("utf-8", errors="replace")
+    )
+    report: dict[str, Any] = {}
+    if fmt in EXTRA_TRACK_FORMATS:  # read whole (within the upload limit), as before
+        fixes, extra_report = read_extra_format(fmt, stream.read())
+        return TrackStream(fmt, iter(fixes), extra_report)
+    if fmt == "gpx":
+        return TrackStream(fmt, _read_gpx(stream, report), report)
+    if fmt in ("nmea", "csv"):
+        text = io.TextIOWrapper(stream, encoding="utf-8-sig", errors="replace", newline="")
+        reader = _read_nmea if fmt == "nmea" else _read_csv
+        return TrackStream(fmt, reader(text, report), report)
+    raise TrackFormatError(
+        "file",
+        "is not a track file tillpath can read: expected GPX, KML, CSV with a "
+        "time,lat,lon header, gpsbabel unicsv, RTKLIB .pos, u-blox UBX or an NMEA 0183 log",
+    )
+
+
+def check_not_empty(fmt: str, count: int, report: dict[str, Any]) -> None:
+    """Raise ``file: has no usable fix (…)`` if a file of format ``fmt`` gave no fix."""
+    if count:
+        return
+    details = ", ".join(f"{k.replace('_', ' ')}: {v}" for k, v in report.items() if v)
+    raise TrackFormatError(
+        "file", f"has no usable fix ({fmt.upper()}{'; ' + details if details else ''})"
     )
 
 
 # --- GPX ---------------------------------------------------------------------------------------
 
 
-def _read_gpx(data: bytes) -> tuple[list[TrackFix], dict[str, Any]]:
-    try:
-        check_xml(data, filename="file", kind="GPX")  # the one XML safety check (planner.io)
-    except UnreadableFileError as exc:
-        raise TrackFormatError("file", exc.problem) from None
-    try:
-        gpx = gpxpy.parse(data.decode("utf-8", errors="replace"))
-    except (gpxpy.gpx.GPXException, ValueError) as exc:
-        raise TrackFormatError("file", f"is not a valid GPX file ({exc})") from None
+def _local(tag: str) -> str:
+    return tag.rsplit("}", 1)[-1]
 
-    untimed = 0
-    for index, track in enumerate(gpx.tracks):
-        fixes: list[TrackFix] = []
+
+def _read_gpx(stream: BinaryIO, report: dict[str, Any]) -> Iterator[TrackFix]:
+    """Yield the timed points of the first ``<trk>`` that has any, reading incrementally.
+
+    Each ``<trkpt>``, ``<rtept>`` and ``<wpt>`` is removed from the tree once read, so memory
+    holds one point at a time. The rest of the file is still parsed (to count the tracks and
+    to refuse a file that is not well-formed).
+    """
+    try:
+        events = defusedxml.ElementTree.iterparse(
+            stream,
+            events=("start", "end"),
+            forbid_dtd=True,
+            forbid_entities=True,
+            forbid_external=True,
+        )
+        stack: list[Any] = []
+        tracks = 0
+        chosen = False  # a track with timed points has been read
         untimed = 0
-        for segment in track.segments:
-            for point in segment.points:
-                if point.time is None:
-                    untimed += 1
-                    continue
-                lat, lon = float(point.latitude), float(point.longitude)
-                check_position(lat, lon, input_name=f"file: track {index + 1}")
-                fixes.append(
-                    TrackFix(
-                        t=_checked_time(datetime_to_us(point.time), "file: GPX point time"),
-                        lat=lat,
-                        lon=lon,
-                        heading_deg=_finite_or_none(point.course),
-                        speed_mps=_finite_or_none(point.speed),
-                        quality=GPX_FIXES.get(str(point.type_of_gpx_fix or "").lower()),
-                        hdop=_finite_or_none(_float_or_none(point.horizontal_dilution)),
-                        satellites=_int_or_none(point.satellites),
+        track_name: str | None = None
+        yielded = 0
+        for event, elem in events:
+            name = _local(elem.tag)
+            if event == "start":
+                if not stack and name != "gpx":
+                    raise TrackFormatError(
+                        "file", f"is not a valid GPX file (its root element is <{name}>)"
                     )
+                stack.append(elem)
+                if name == "trk":
+                    tracks += 1
+                    if not chosen:
+                        untimed, track_name, yielded = 0, None, 0
+                continue
+            stack.pop()
+            parent = _local(stack[-1].tag) if stack else ""
+            if name == "name" and parent == "trk" and not chosen and tracks:
+                track_name = (elem.text or "").strip() or None
+            elif name == "trkpt" and not chosen:
+                fix = _gpx_point(elem, tracks)
+                if fix is None:
+                    untimed += 1
+                else:
+                    yielded += 1
+                    yield fix
+            elif name == "trk" and yielded and not chosen:
+                chosen = True
+                report.update(
+                    track=track_name or f"track {tracks}", tracks_ignored=0, untimed_points=untimed
                 )
-        if fixes:
-            return fixes, {
-                "track": track.name or f"track {index + 1}",
-                "tracks_ignored": len(gpx.tracks) - 1,
-                "untimed_points": untimed,
-            }
-    return [], {"tracks": len(gpx.tracks), "untimed_points": untimed}
+            if name in ("trkpt", "rtept", "wpt") and stack:
+                stack[-1].remove(elem)
+    except DefusedXmlException:
+        raise TrackFormatError(
+            "file", "GPX with a DTD, entity declarations or external references is refused"
+        ) from None
+    except TrackFormatError:
+        raise
+    except Exception as exc:  # ParseError: not well-formed (truncated, …)
+        raise TrackFormatError("file", f"is not well-formed XML ({exc})") from None
+    if chosen:
+        report["tracks_ignored"] = tracks - 1
+    else:
+        report.update(tracks=tracks, untimed_points=untimed)
+
+
+def _gpx_point(elem: Any, track: int) -> TrackFix | None:
+    where = f"file: track {track}"
+    lat = _optional_float(elem.get("lat"), input_name=f"{where}: lat")
+    lon = _optional_float(elem.get("lon"), input_name=f"{where}: lon")
+    if lat is None or lon is None:
+        raise TrackFormatError(where, "a <trkpt> needs lat and lon")
+    check_position(lat, lon, input_name=where)
+    values: dict[str, str] = {}
+    for child in elem:
+        values.setdefault(_local(child.tag), (child.text or "").strip())
+    if not values.get("time"):
+        return None
+    try:
+        when = dt.datetime.fromisoformat(values["time"][:MAX_TIME_TEXT])
+    except ValueError:
+        raise TrackFormatError(
+            f"{where}: time", f"{values['time'][:40]!r} is not an ISO 8601 time"
+        ) from None
+    heading = _finite_or_none(_optional_float(values.get("course"), input_name=f"{where}: course"))
+    speed = _finite_or_none(_optional_float(values.get("speed"), input_name=f"{where}: speed"))
+    check_motion(heading, speed, input_name=where)
+    hdop = _optional_float(values.get("hdop"), input_name=f"{where}: hdop")
+    sat = _optional_float(values.get("sat"), input_name=f"{where}: sat")
+    return TrackFix(
+        t=_checked_time(datetime_to_us(when), "file: GPX point time"),
+        lat=lat,
+        lon=lon,
+        heading_deg=heading,
+        speed_mps=speed,
+        quality=GPX_FIXES.get(values.get("fix", "").lower()),
+        hdop=hdop if hdop is not None and 0 <= hdop <= 1000 else None,
+        satellites=int(sat) if sat is not None and 0 <= sat <= 1000 else None,
+    )
 
 
 def _float_or_none(value: object) -> float | None:
@@ -447,8 +614,8 @@ def _checked_time(t: int, input_name: str) -> int:
 # --- CSV ---------------------------------------------------------------------------------------
 
 
-def _read_csv(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
-    reader = csv.reader(io.StringIO(text.lstrip("\ufeff")))
+def _read_csv(lines: Iterable[str], report: dict[str, Any]) -> Iterator[TrackFix]:
+    reader = csv.reader(lines)
     try:
         header = next(reader)
     except StopIteration:
@@ -457,7 +624,7 @@ def _read_csv(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
         raise TrackFormatError("file", f"line 1: {exc}") from None
     columns: dict[str, int] = {}
     for i, name in enumerate(header):
-        key = _CSV_COLUMNS.get(name.strip().lower())
+        key = _CSV_COLUMNS.get(name.strip().lstrip("\ufeff").lower())
         if key is not None and key not in columns:
             columns[key] = i
     missing = [name for name in ("time", "lat", "lon") if name not in columns]
@@ -468,7 +635,6 @@ def _read_csv(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
             f"missing: {', '.join(missing)}",
         )
     width = max(columns.values()) + 1
-    fixes: list[TrackFix] = []
     try:
         for row in reader:
             line = reader.line_num
@@ -491,21 +657,23 @@ def _read_csv(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
                 )
             if "speed_mps" in columns and columns["speed_mps"] < len(row):
                 speed = _optional_float(row[columns["speed_mps"]], input_name=f"{where}: speed_mps")
-            fixes.append(
-                TrackFix(
-                    t=parse_time(row[columns["time"]], input_name=f"{where}: time"),
-                    lat=lat,
-                    lon=lon,
-                    heading_deg=heading,
-                    speed_mps=speed,
-                )
+            check_motion(heading, speed, input_name=where)
+            yield TrackFix(
+                t=parse_time(row[columns["time"]], input_name=f"{where}: time"),
+                lat=lat,
+                lon=lon,
+                heading_deg=heading,
+                speed_mps=speed,
             )
     except csv.Error as exc:
         raise TrackFormatError(f"file: line {reader.line_num}", str(exc)) from None
-    return fixes, {}
 
 
 # --- NMEA 0183 -------------------------------------------------------------------------------
+
+#: Epochs held while waiting for the first RMC date (about 3 h at 10 Hz); then the log is
+#: refused, so that a log without dates cannot hold the whole file in memory.
+_MAX_UNDATED_EPOCHS: Final = 100_000
 
 
 @dataclass(slots=True)
@@ -534,30 +702,31 @@ def _nmea_position(msg: Any) -> tuple[float, float] | None:
     return float(msg.latitude), float(msg.longitude)
 
 
-def _read_nmea(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
-    bad = 0
-    no_fix = 0
-    sentences: list[tuple[str, Any]] = []
-    for raw in text.splitlines():
+def _nmea_sentences(lines: Iterable[str], report: dict[str, Any]) -> Iterator[tuple[str, Any]]:
+    """Yield ``(kind, message)`` of the GGA and RMC sentences; count the unreadable ones."""
+    for raw in lines:
         line = raw.strip()
         if not line:
             continue
         start = line.find("$")
         if start < 0 or not _NMEA_LINE.match(line[start:]):
-            bad += 1
+            report["bad_sentences"] += 1
             continue
         try:
             msg = pynmea2.parse(line[start:], check=True)
         except (pynmea2.ParseError, ValueError, AttributeError, TypeError, IndexError):
-            bad += 1
+            report["bad_sentences"] += 1
             continue
         kind = line[start + 3 : start + 6]
         if kind in ("GGA", "RMC"):
-            sentences.append((kind, msg))
+            report["sentences"] += 1
+            yield kind, msg
 
-    # One epoch per time of day, in log order; consecutive sentences with the same time merge.
-    epochs: list[_Epoch] = []
-    for kind, msg in sentences:
+
+def _nmea_epochs(lines: Iterable[str], report: dict[str, Any]) -> Iterator[_Epoch]:
+    """Yield one epoch per time of day, in log order, once its sentences are all read."""
+    epoch: _Epoch | None = None
+    for kind, msg in _nmea_sentences(lines, report):
         try:
             stamp = msg.timestamp
             position = _nmea_position(msg)
@@ -569,15 +738,16 @@ def _read_nmea(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
                 status = msg.status
                 date = msg.datestamp
         except (ValueError, TypeError, AttributeError, IndexError):
-            bad += 1
+            report["bad_sentences"] += 1
             continue
         if not isinstance(stamp, dt.time):
-            bad += 1
+            report["bad_sentences"] += 1
             continue
         seconds = _time_of_day_s(stamp)
-        if not epochs or abs(epochs[-1].seconds - seconds) > 1e-6:
-            epochs.append(_Epoch(seconds=seconds))
-        epoch = epochs[-1]
+        if epoch is None or abs(epoch.seconds - seconds) > 1e-6:
+            if epoch is not None:
+                yield epoch
+            epoch = _Epoch(seconds=seconds)
         if kind == "GGA":
             if quality == 0 or position is None:
                 epoch.no_fix = True
@@ -592,55 +762,82 @@ def _read_nmea(text: str) -> tuple[list[TrackFix], dict[str, Any]]:
                 continue
             if epoch.lat is None:
                 epoch.lat, epoch.lon = position
-            epoch.heading_deg = _finite_or_none(msg.true_course)
+            heading = _finite_or_none(msg.true_course)
             knots = _finite_or_none(msg.spd_over_grnd)
-            epoch.speed_mps = None if knots is None else knots * MPS_PER_KNOT
-
-    dates = [e.date for e in epochs if e.date is not None]
-    report = {"bad_sentences": bad, "no_fix": 0, "sentences": len(sentences)}
-    if not dates:
-        if any(e.lat is not None for e in epochs):
-            raise TrackFormatError(
-                "file",
-                "the NMEA log has no RMC sentence with a date, so its GGA fixes cannot be "
-                "placed in time; log RMC too (u-blox receivers do by default)",
+            speed = None if knots is None else knots * MPS_PER_KNOT
+            # A value out of range is dropped (as an unreadable sentence would be).
+            epoch.heading_deg = (
+                heading if heading is None or abs(heading) <= MAX_HEADING_DEG else None
             )
-        report["no_fix"] = sum(1 for e in epochs if e.no_fix)
-        return [], report
+            epoch.speed_mps = speed if speed is None or 0 <= speed <= MAX_SPEED_MPS else None
+    if epoch is not None:
+        yield epoch
 
-    # Each epoch's day: the date of the last RMC, moved on by a day where the time of day falls
-    # back by more than 12 h (midnight passed); before the first RMC, counted back from it.
-    first = next(i for i, e in enumerate(epochs) if e.date is not None)
-    days: list[dt.date] = [dates[0]] * len(epochs)
-    for i in range(first - 1, -1, -1):
-        later = epochs[i + 1].seconds
-        days[i] = days[i + 1] - dt.timedelta(days=1 if epochs[i].seconds > later + 43_200 else 0)
-    for i in range(first + 1, len(epochs)):
-        epoch = epochs[i]
-        if epoch.date is not None:
-            days[i] = epoch.date
+
+def _read_nmea(lines: Iterable[str], report: dict[str, Any]) -> Iterator[TrackFix]:
+    """Yield the NMEA log's fixes, dating each epoch as it streams by.
+
+    Each epoch's day is the date of the last RMC, moved on by a day where the time of day
+    falls back by more than 12 h (midnight passed); the epochs before the first RMC are held
+    and counted back from it.
+    """
+    report.update(bad_sentences=0, no_fix=0, sentences=0)
+    undated: list[_Epoch] = []
+    previous: tuple[_Epoch, dt.date] | None = None
+    for epoch in _nmea_epochs(lines, report):
+        if previous is None:
+            if epoch.date is None:
+                undated.append(epoch)
+                if len(undated) > _MAX_UNDATED_EPOCHS:
+                    _refuse_undated(undated, report)
+                continue
+            # The first dated epoch: count the held ones back from it.
+            days = [epoch.date]
+            later = epoch
+            for held in reversed(undated):
+                back = 1 if held.seconds > later.seconds + 43_200 else 0
+                days.append(days[-1] - dt.timedelta(days=back))
+                later = held
+            for held, day in zip(undated, reversed(days[1:]), strict=True):
+                yield from _nmea_fix(held, day, report)
+            undated = []
+            day = epoch.date
         else:
-            passed = epoch.seconds < epochs[i - 1].seconds - 43_200
-            days[i] = days[i - 1] + dt.timedelta(days=1 if passed else 0)
+            before, before_day = previous
+            if epoch.date is not None:
+                day = epoch.date
+            else:
+                passed = epoch.seconds < before.seconds - 43_200
+                day = before_day + dt.timedelta(days=1 if passed else 0)
+        yield from _nmea_fix(epoch, day, report)
+        previous = (epoch, day)
+    if previous is None:
+        _refuse_undated(undated, report)
 
-    fixes: list[TrackFix] = []
-    for epoch, day in zip(epochs, days, strict=True):
-        if epoch.no_fix or epoch.lat is None or epoch.lon is None:
-            no_fix += 1
-            continue
-        check_position(epoch.lat, epoch.lon, input_name="file: NMEA position")
-        midnight = datetime_to_us(dt.datetime.combine(day, dt.time(0, 0), tzinfo=dt.UTC))
-        fixes.append(
-            TrackFix(
-                t=_checked_time(midnight + round(epoch.seconds * 1e6), "file: NMEA time"),
-                lat=epoch.lat,
-                lon=epoch.lon,
-                heading_deg=epoch.heading_deg,
-                speed_mps=epoch.speed_mps,
-                quality=epoch.quality,
-                hdop=epoch.hdop,
-                satellites=epoch.satellites,
-            )
+
+def _refuse_undated(undated: list[_Epoch], report: dict[str, Any]) -> None:
+    if any(e.lat is not None for e in undated):
+        raise TrackFormatError(
+            "file",
+            "the NMEA log has no RMC sentence with a date, so its GGA fixes cannot be "
+            "placed in time; log RMC too (u-blox receivers do by default)",
         )
-    report["no_fix"] = no_fix
-    return fixes, report
+    report["no_fix"] = sum(1 for e in undated if e.no_fix)
+
+
+def _nmea_fix(epoch: _Epoch, day: dt.date, report: dict[str, Any]) -> Iterator[TrackFix]:
+    if epoch.no_fix or epoch.lat is None or epoch.lon is None:
+        report["no_fix"] += 1
+        return
+    check_position(epoch.lat, epoch.lon, input_name="file: NMEA position")
+    midnight = datetime_to_us(dt.datetime.combine(day, dt.time(0, 0), tzinfo=dt.UTC))
+    yield TrackFix(
+        t=_checked_time(midnight + round(epoch.seconds * 1e6), "file: NMEA time"),
+        lat=epoch.lat,
+        lon=epoch.lon,
+        heading_deg=epoch.heading_deg,
+        speed_mps=epoch.speed_mps,
+        quality=epoch.quality,
+        hdop=epoch.hdop,
+        satellites=epoch.satellites,
+    )

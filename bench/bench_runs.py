@@ -1,10 +1,13 @@
 """Field runs: store a 6-hour 10 Hz run (216,000 fixes), then load and score it (issue 6).
 
-Budget: loading a run's fixes from the database and scoring them against the plan
-(``app.runs.load_track`` + ``app.runs.score_run``, i.e. ``navigation.score_track``) in under
-2 s, on SQLite and on PostgreSQL. The insert (one transaction, ``INSERT … ON CONFLICT DO
-NOTHING`` in 5,000-row statements) and the whole ``GET /api/runs/{id}`` body (``run_view``:
-load, score, thinned track and stretches) are shown beside it.
+Budgets: storing the uploaded log (product.md §11: ≤ 2 s on SQLite and on PostgreSQL) with the
+bulk path of :mod:`app.ingest` (the fixes as columns; a new run and its fixes in one
+transaction: ``COPY`` on PostgreSQL, ``executemany`` on SQLite), and loading a run's fixes and
+scoring them against the plan (``app.runs.load_track`` + ``app.runs.score_run``, i.e.
+``navigation.score_track``) in under 2 s. A retried upload of the same fixes into the existing
+run (``COPY`` into a temporary table, ``INSERT … ON CONFLICT DO NOTHING``: nothing new) and the
+whole ``GET /api/runs/{id}`` body (``run_view``: load, score, thinned track and stretches) are
+shown beside them.
 
 The track drives a 1.2 ha plan at 1 m (about 12 km of path) in exactly 6 hours at 10 Hz, with
 a slowly wandering 0.5 m error as a tractor on RTK-less GPS shows. PostgreSQL is measured on a
@@ -25,8 +28,8 @@ import numpy as np
 import shapely
 from sqlalchemy.orm import Session
 
-from app import runs
-from app.db import make_engine, upgrade_database
+from app import accounts, ingest, runs
+from app.db import make_engine, upgrade_database, write
 from app.models import Plan, Run
 from app.schemas import PlanCreate
 from app.services import plan_field
@@ -84,17 +87,23 @@ def measure(url: str) -> dict[str, Any]:
     try:
         with Session(engine, expire_on_commit=False) as session:
             plan = plan_field(PlanCreate(name="bench", field=field_geojson(), interval_m=1.0))
+            plan.organisation_id = accounts.get_or_create_organisation(session, "bench").id
             session.add(plan)
             session.commit()
             fixes = six_hour_track(plan)
-            run = Run(plan_id=plan.id, name="6 h", source="live", import_report={})
-            session.add(run)
-            session.commit()
             started = time.perf_counter()
-            stored = runs.insert_fixes(session, run.id, fixes)
-            session.commit()
+            columns = ingest.collect(fixes)
+            collect_s = time.perf_counter() - started
+            started = time.perf_counter()
+            run = runs.create_run_from_columns(
+                session, plan, columns, source="csv", report={}, name="6 h"
+            )
             insert_s = time.perf_counter() - started
-            assert stored == FIXES, stored
+            assert runs.count_fixes(session, run.id) == FIXES
+            started = time.perf_counter()
+            again = write(session, lambda s: ingest.store_fixes(s, run.id, columns))
+            again_s = time.perf_counter() - started
+            assert again == 0, again
 
         load, score, total, view = [], [], [], []
         metrics = None
@@ -119,6 +128,8 @@ def measure(url: str) -> dict[str, Any]:
                 view.append(time.perf_counter() - started)
         assert metrics is not None
         return {
+            "collect_s": collect_s,
+            "again_s": again_s,
             "insert_s": insert_s,
             "load_s": statistics.median(load),
             "score_s": statistics.median(score),
@@ -152,24 +163,29 @@ def run() -> str:
             results["PostgreSQL"] = measure(url)
 
     lines = [
-        "## Field runs: load and score a 6-hour 10 Hz run",
+        "## Field runs: store, load and score a 6-hour 10 Hz run",
         "",
         f"{FIXES:,} fixes (6 h at 10 Hz) along a 1.2 ha plan at 1 m; median of {REPEAT}. "
-        f"Budget: load + score < {BUDGET_S:.0f} s.",
+        f"Budgets: store ≤ {BUDGET_S:.0f} s (bulk path, once), load + score < "
+        f"{BUDGET_S:.0f} s. Measured on the shared 2-core machine while other work ran on it.",
         "",
-        "| database | insert (once) | load | score | load + score | verdict | "
-        "whole `GET /api/runs/{id}` |",
-        "| --- | --- | --- | --- | --- | --- | --- |",
+        "| database | fixes to columns | **store (new run)** | verdict | same fixes again | "
+        "load | score | load + score | verdict | whole `GET /api/runs/{id}` |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for label, r in results.items():
+        store_verdict = "met" if r["insert_s"] <= BUDGET_S else "**missed**"
         verdict = "met" if r["total_max_s"] < BUDGET_S else "**missed**"
         lines.append(
-            f"| {label} | {r['insert_s']:.2f} s | {r['load_s']:.2f} s | {r['score_s']:.2f} s | "
+            f"| {label} | {r['collect_s']:.2f} s | **{r['insert_s']:.2f} s** | {store_verdict} | "
+            f"{r['again_s']:.2f} s | {r['load_s']:.2f} s | {r['score_s']:.2f} s | "
             f"{r['total_s']:.2f} s (max {r['total_max_s']:.2f} s) | {verdict} | "
             f"{r['view_s']:.2f} s |"
         )
     if not base:
-        lines.append("| PostgreSQL | not measured: set TILLPATH_BENCH_DATABASE_URL | | | | | |")
+        lines.append(
+            "| PostgreSQL | not measured: set TILLPATH_BENCH_DATABASE_URL | | | | | | | | |"
+        )
     any_result = next(iter(results.values()))
     lines += [
         "",

@@ -110,10 +110,11 @@ def register(cli: typer.Typer) -> None:
         import uvicorn
 
         from app.budget import warm_up
+        from app.serving import uvicorn_options
+        from app.settings import get_settings
 
         check_tls_files(certfile, keyfile)
         from app.jobs.engine import start_local_cluster
-        from app.settings import get_settings
 
         shown = upgrade()
         scheme = "https" if certfile else "http"
@@ -147,6 +148,7 @@ def register(cli: typer.Typer) -> None:
                 proxy_headers=True,
                 ssl_certfile=str(certfile) if certfile else None,
                 ssl_keyfile=str(keyfile) if keyfile else None,
+                **uvicorn_options(settings),
             )
         finally:
             if cluster is not None:

@@ -5,10 +5,12 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, Query, Response, status
+from sqlalchemy.orm import Session
 
 from app import fields, services
 from app.auth import Planner, Viewer
-from app.db import SessionDep
+from app.capacity import HeavyWorkDep
+from app.db import SessionDep, copy_row, delete_row, end_reads, write
 from app.models import Plan
 from app.schemas import ErrorRead, ExportFormat, PlanCreate, PlanList, PlanRead
 from app.settings import Settings, get_settings
@@ -25,22 +27,31 @@ _NOT_FOUND: dict[int | str, dict[str, Any]] = {
 _TOO_LARGE: dict[int | str, dict[str, Any]] = {
     413: {"model": ErrorRead, "description": "Body over the configured limit"}
 }
+_BUSY: dict[int | str, dict[str, Any]] = {
+    503: {"model": ErrorRead, "description": "Server busy: retry after `Retry-After` seconds"}
+}
 
 
-@router.post("/preview", response_model=PlanRead, responses={**_BAD_INPUT, **_TOO_LARGE})
+@router.post("/preview", response_model=PlanRead, responses={**_BAD_INPUT, **_TOO_LARGE, **_BUSY})
 def preview_plan(
-    body: PlanCreate, session: SessionDep, access: Viewer, settings: SettingsDep
+    body: PlanCreate,
+    session: SessionDep,
+    access: Viewer,
+    settings: SettingsDep,
+    heavy: HeavyWorkDep,
 ) -> Plan:
     """Plan a coverage path without storing it (``id`` and ``created_at`` are null)."""
     resolved = fields.resolve_plan_body(session, body, access)
-    return services.plan_field(resolved, budget_s=settings.planning_budget_s)
+    end_reads(session)  # no connection held while planning
+    with heavy.slot("preview"):
+        return services.plan_field(resolved, budget_s=settings.planning_budget_s)
 
 
 @router.post(
     "",
     response_model=PlanRead,
     status_code=status.HTTP_201_CREATED,
-    responses={**_BAD_INPUT, **_TOO_LARGE},
+    responses={**_BAD_INPUT, **_TOO_LARGE, **_BUSY},
 )
 def create_plan(
     body: PlanCreate,
@@ -48,6 +59,7 @@ def create_plan(
     access: Planner,
     settings: SettingsDep,
     response: Response,
+    heavy: HeavyWorkDep,
 ) -> Plan:
     """Plan a coverage path and store it; ``Location`` names the new plan.
 
@@ -55,10 +67,16 @@ def create_plan(
     registry, or reuses the organisation's field with the same boundary.
     """
     resolved = fields.resolve_plan_body(session, body, access)
-    plan = services.plan_field(resolved, budget_s=settings.planning_budget_s)
-    fields.attach_field(session, plan, resolved, access)
-    session.add(plan)
-    session.commit()
+    end_reads(session)  # no connection held while planning
+    with heavy.slot("plan"):
+        planned = services.plan_field(resolved, budget_s=settings.planning_budget_s)
+
+    def store(s: Session) -> Plan:
+        plan = copy_row(planned)  # afresh for each try of the write
+        fields.attach_field(s, plan, resolved, access)
+        return plan
+
+    plan = write(session, store)
     response.headers["Location"] = f"/api/plans/{plan.id}"
     return plan
 
@@ -94,8 +112,8 @@ def read_plan(plan_id: int, session: SessionDep, access: Viewer) -> Plan:
 )
 def delete_plan(plan_id: int, session: SessionDep, access: Planner) -> None:
     """Delete a stored plan with its simulations and runs."""
-    session.delete(services.read_plan(session, plan_id, access))
-    session.commit()
+    services.read_plan(session, plan_id, access)
+    delete_row(session, Plan, plan_id, kind="plan")
 
 
 @router.get(

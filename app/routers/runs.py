@@ -6,14 +6,15 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, File, Form, Query, Response, UploadFile, status
 
-from app import runs, services
+from app import live, runs, services
 from app.auth import FixPoster, Planner, Viewer, forbidden
-from app.db import SessionDep
+from app.capacity import HeavyWorkDep
+from app.db import SessionDep, end_reads
 from app.errors import UploadTooLargeError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan
 from app.schemas import ErrorRead, FixesAdded, FixIn, PlanRead, RunList, RunRead
 from app.settings import Settings, get_settings
-from app.tracks import TrackFormatError, parse_track
+from app.tracks import MAX_TIME_TEXT, check_text, parse_time, read_track
 
 router = APIRouter(tags=["runs"])
 
@@ -28,6 +29,9 @@ _TOO_LARGE: dict[int | str, dict[str, Any]] = {
 }
 _CONFLICT: dict[int | str, dict[str, Any]] = {
     409: {"model": ErrorRead, "description": "Not possible for this run (see `detail`)"}
+}
+_BUSY: dict[int | str, dict[str, Any]] = {
+    503: {"model": ErrorRead, "description": "Server busy: retry after `Retry-After` seconds"}
 }
 
 SettingsDep = Annotated[Settings, Depends(get_settings)]
@@ -45,13 +49,14 @@ ThresholdQuery = Annotated[
     "/plans/{plan_id}/runs",
     response_model=RunRead,
     status_code=status.HTTP_201_CREATED,
-    responses={**_BAD_INPUT, **_NOT_FOUND, **_TOO_LARGE},
+    responses={**_BAD_INPUT, **_NOT_FOUND, **_TOO_LARGE, **_BUSY},
 )
 def create_run(
     plan_id: int,
     session: SessionDep,
     settings: SettingsDep,
     access: FixPoster,
+    heavy: HeavyWorkDep,
     response: Response,
     file: Annotated[
         UploadFile | None,
@@ -67,30 +72,34 @@ def create_run(
     A multipart body with `file` uploads a track (format detected from its content). No body,
     an empty JSON object `{}` or a form without `file` creates an empty live run, to which the
     tractor's logger then posts fixes. Nothing is stored when the file is refused. A device
-    token may open a live run; uploading a file needs the planner role.
+    token may open a live run; uploading a file needs the planner role. The file is read as a
+    stream and its fixes stored in one transaction (all or nothing).
     """
+    given = check_text((name or "").strip(), input_name="name") or None
     plan = services.read_plan(session, plan_id, access)
-    if name is not None and "\x00" in name:  # PostgreSQL text cannot hold NUL
-        raise TrackFormatError("name", "must not contain NUL characters")
     if file is not None and access.via == "device":
         raise forbidden(
             "a device token may open a live run and post fixes; uploading a "
             "track needs the planner role"
         )
+    end_reads(session)
     if file is None:
-        run = runs.create_live_run(session, plan, name=(name or "").strip() or None)
+        run = runs.create_live_run(session, plan, name=given)
     else:
         limit = settings.max_upload_bytes
-        data = file.file.read(limit + 1)
-        if len(data) > limit:
+        if file.size is not None and file.size > limit:
             raise UploadTooLargeError(limit)
-        track = parse_track(data)
-        run_name = (name or "").strip() or (file.filename or "").strip() or None
-        run = runs.create_run_from_track(
-            session, plan, track, name=run_name[:PLAN_NAME_MAX_LENGTH] if run_name else None
+        filename = "".join(c for c in (file.filename or "") if c.isprintable()).strip()
+        run_name = (given or filename)[:PLAN_NAME_MAX_LENGTH] or None
+        with heavy.slot("upload"):
+            stream = read_track(file.file)
+            columns, report = runs.read_upload(stream)
+        run = runs.create_run_from_columns(
+            session, plan, columns, source=stream.format, report=report, name=run_name
         )
     response.headers["Location"] = f"/api/runs/{run.id}"
-    return runs.run_view(session, run)
+    with heavy.slot("run"):
+        return live.full_view(session, run, threshold_m=runs.DEFAULT_THRESHOLD_M)
 
 
 @router.get("/plans/{plan_id}/runs", response_model=RunList, responses={**_NOT_FOUND, **_BAD_INPUT})
@@ -100,15 +109,32 @@ def list_runs(plan_id: int, session: SessionDep, access: Viewer) -> RunList:
     return runs.list_runs(session, plan_id, access)
 
 
-@router.get("/runs/{run_id}", response_model=RunRead, responses={**_NOT_FOUND, **_BAD_INPUT})
+@router.get(
+    "/runs/{run_id}", response_model=RunRead, responses={**_NOT_FOUND, **_BAD_INPUT, **_BUSY}
+)
 def read_run(
     run_id: int,
     session: SessionDep,
     access: Viewer,
+    heavy: HeavyWorkDep,
     threshold_m: ThresholdQuery = runs.DEFAULT_THRESHOLD_M,
+    since: Annotated[
+        str | None,
+        Query(
+            max_length=MAX_TIME_TEXT,
+            description="Only the fixes after this time (the `last_fix.t` of the previous "
+            "read; ISO 8601 or epoch seconds) in `track`, and the last figures computed: a "
+            "live run's poll, fast however long the run.",
+        ),
+    ] = None,
 ) -> dict[str, Any]:
     """Return a run with its metrics against the plan (as a simulation's), track and stretches."""
-    return runs.run_view(session, runs.read_run(session, run_id, access), threshold_m=threshold_m)
+    run = runs.read_run(session, run_id, access)
+    if since is not None:
+        since_us = parse_time(since, input_name="since")
+        return live.live_view(session, run, since_us=since_us, threshold_m=threshold_m, heavy=heavy)
+    with heavy.slot("run"):
+        return live.full_view(session, run, threshold_m=threshold_m)
 
 
 @router.post(

@@ -50,7 +50,10 @@ def _answer(simulation: Simulation, tracks: TrackDetail) -> Simulation | Simulat
     responses={
         **_BAD_INPUT,
         **_NOT_FOUND,
-        503: {"model": ErrorRead, "description": "The server runs no job engine"},
+        503: {
+            "model": ErrorRead,
+            "description": "No job engine, or server busy: retry after `Retry-After` seconds",
+        },
     },
 )
 def create_simulation(

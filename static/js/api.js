@@ -146,8 +146,10 @@ export class ChecksApi {
     return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/runs`);
   }
 
-  readRun(id) {
-    return requestJson(`${this.apiUrl}/runs/${encodeURIComponent(id)}`);
+  /** A run; with `since` (a fix time), only the fixes after it and the last figures computed. */
+  readRun(id, since) {
+    const query = since ? `?since=${encodeURIComponent(since)}` : "";
+    return requestJson(`${this.apiUrl}/runs/${encodeURIComponent(id)}${query}`);
   }
 
   runGpxUrl(id) {

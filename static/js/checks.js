@@ -121,7 +121,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
     runs: $("runs-list"),
     runsEmpty: $("runs-empty"),
   };
-  const state = { planId: null, simLayer: null, runLayer: null, runId: null, timer: null, seq: 0 };
+  const state = { planId: null, simLayer: null, runLayer: null, runId: null, run: null, timer: null, seq: 0 };
   const progress = jobProgress(
     { box: $("sim-job"), bar: $("sim-progress"), label: $("sim-progress-label"), cancel: $("sim-cancel") },
     (id) => api.cancelJob(id),
@@ -180,6 +180,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
   function showRun(run) {
     state.runLayer?.remove();
     state.runId = run.id;
+    state.run = run;
     const group = L.layerGroup();
     if (run.track) {
       L.polyline(latLngs(run.track.geometry.coordinates), {
@@ -239,13 +240,27 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError, onRe
   async function pollRun(id) {
     if (state.runId !== id) return;
     try {
-      const run = await api.readRun(id);
-      if (state.runId === id) showRun(run);
+      // Only what is new since the last fix drawn: fast however long the run (issue 15).
+      const since = state.run?.id === id ? state.run.last_fix?.t : undefined;
+      const update = await api.readRun(id, since);
+      if (state.runId === id) showRun(since ? withNewFixes(state.run, update) : update);
     } catch (error) {
       // A lost connection in the field is normal: try again on the next tick.
       if (state.runId === id) state.timer = setTimeout(() => pollRun(id), LIVE_POLL_MS);
       if (error?.status === 404) stopPolling();
     }
+  }
+
+  /** The run read before with the newer fixes of `update` appended to its track. */
+  function withNewFixes(run, update) {
+    if (!update.track) return { ...update, track: run.track };
+    if (!run.track) return update;
+    const coordinates = [...run.track.geometry.coordinates, ...update.track.geometry.coordinates];
+    const time_s = [...(run.track.properties.time_s || []), ...(update.track.properties.time_s || [])];
+    return {
+      ...update,
+      track: { ...run.track, properties: { ...run.track.properties, time_s }, geometry: { ...run.track.geometry, coordinates } },
+    };
   }
 
   function listItem({ id, title, meta, label, onOpen }) {

@@ -22,7 +22,9 @@ from app.errors import (
     BodySizeLimitMiddleware,
     BodyTooLargeError,
     ConflictError,
+    DatabaseBusyError,
     NotFoundError,
+    ServerBusyError,
     UnavailableError,
     UploadTooLargeError,
     format_validation_errors,
@@ -274,8 +276,10 @@ def test_error_table_maps_every_planner_error_to_422():
     assert status_for(TrackFormatError("file", "x")) == 422
     assert status_for(UploadTooLargeError(10)) == 413
     assert status_for(ConflictError("run 1: x")) == 409
-    assert status_for(UnavailableError("jobs: no engine")) == 503
     assert set(STATUS_CODES.values()) == {401, 404, 409, 413, 422, 429, 503}
+    assert status_for(ServerBusyError("simulation")) == 503
+    assert status_for(DatabaseBusyError()) == 503
+    assert status_for(UnavailableError("jobs: no engine")) == 503
 
 
 def test_format_validation_errors_names_nested_inputs():

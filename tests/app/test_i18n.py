@@ -150,6 +150,12 @@ def test_every_validation_wording_has_a_translatable_template() -> None:
         ),
         ("field: area is 2,345 ha; tillpath plans fields up to 2,000 ha at once", None),
         ("something nobody listed", "something nobody listed"),
+        # A list body's item (a batch of fixes) and the answers of a server under load.
+        ("[0].t: must lie between 1980 and 2100", "[0].t: harus di antara tahun 1980 dan 2100"),
+        (
+            "simulation: the server is busy with other work; try again in 2 s",
+            "simulation: server sedang sibuk dengan pekerjaan lain; coba lagi dalam 2 detik",
+        ),
     ],
 )
 def test_translate_detail(detail: str, expected: str | None) -> None:
