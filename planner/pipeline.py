@@ -6,8 +6,8 @@ This module only chains the stages; the geometry lives in the stage modules.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Any, cast
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -16,21 +16,26 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.coverage import convex_chains, covered_area
-from planner.lines import from_sweep, line_positions, to_sweep
-from planner.ordering import ordered_line_ends, score_headings
+from planner.errors import InvalidParameterError
+from planner.general import add_fitted_lines
+from planner.line_ends import convex_lines
+from planner.lines import to_sweep
+from planner.ordering import score_headings
 from planner.projection import LocalFrame, field_frame
-from planner.turns import pivot_time_s
+from planner.turns import driving_time_s
 from planner.types import (
     DEFAULT_SPEED_MPS,
-    DEFAULT_TRACK_WIDTH_M,
     CoveragePlan,
     Objective,
     PathSegment,
+    Pattern,
     PlanStats,
     SegmentKind,
+    Vehicle,
     Waypoint,
     WaypointRole,
 )
+from planner.vehicles import resolve_vehicle
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -48,9 +53,11 @@ def plan_coverage(
     objective: str = "shortest_path",
     headland_passes: int = 0,
     speed_mps: float = DEFAULT_SPEED_MPS,
-    track_width_m: float = DEFAULT_TRACK_WIDTH_M,
+    implement_width_m: float | None = None,
+    vehicle: Any = None,
+    pattern: str = "boustrophedon",
 ) -> CoveragePlan:
-    """Plan the back-and-forth tillage path over a field.
+    """Plan the back-and-forth tillage path over a field for a vehicle and its implement.
 
     Parameters
     ----------
@@ -68,8 +75,16 @@ def plan_coverage(
         Rounds along the inside of the boundary, 0–5, driven after the lines.
     speed_mps : float
         Working speed [m/s], for the time estimate.
-    track_width_m : float
-        Wheel track [m]; sets how long a pivot turn takes.
+    implement_width_m : float, optional
+        Working width of the implement [m], 0.1–50; coverage (R4) is measured with it. Wider
+        than the interval: the passes overlap; narrower: strips are left. Default: the
+        interval.
+    vehicle : str, mapping or Vehicle, optional
+        The machine (product.md §3a): a preset name, ``{"preset": …, <field>: …}`` or a
+        :class:`~planner.types.Vehicle`; default ``hand_tractor``. Its body stays inside the
+        field and its turns are curves it can drive (R1).
+    pattern : {"boustrophedon", "snake", "spiral"}
+        Line order: neighbours back and forth, or skipping lines so that turns need no loops.
 
     Returns
     -------
@@ -95,6 +110,13 @@ def plan_coverage(
     goal = validation.validate_objective(objective)
     passes = validation.validate_headland_passes(headland_passes)
     speed = validation.validate_speed(speed_mps)
+    machine = resolve_vehicle(vehicle)
+    implement = validation.validate_implement_width(implement_width_m, interval)
+    order = validation.validate_pattern(pattern)
+    if order == "spiral":
+        raise InvalidParameterError(
+            "pattern", "spiral is not available yet: choose boustrophedon or snake"
+        )
     field_lonlat, area_m2 = validation.validate_field(field_lonlat)
 
     frame = field_frame(field_lonlat)
@@ -119,7 +141,9 @@ def plan_coverage(
             objective=goal,
             passes=passes,
             speed_mps=speed,
-            track_width_m=track_width_m,
+            vehicle=machine,
+            implement_width_m=implement,
+            pattern=order,
             area_m2=area_m2,
             started=started,
         )
@@ -129,21 +153,28 @@ def plan_coverage(
     lengths, counts = score_headings(ring_xy, headings, interval, start_xy, finish_xy)
     best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
     heading = float(headings[best])
-    # One convex cell: its lines end on the chains, which coverage needs as well.
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
-    chains = convex_chains(u_ring, v_ring)
-    u = line_positions(chains.u_min, chains.u_max, interval)
-    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
-    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
+    # One convex cell: its lines end where the vehicle's turns fit inside the field.
+    fit = convex_lines(
+        field_local,
+        heading,
+        interval_m=interval,
+        vehicle=machine,
+        pattern=order,
+        variant=variant,
+    )
     route = _Route()
     if start_xy is not None:
         route.add("start", None, [start_xy])
-    _add_lines(route, heading, u, v_lo, v_hi, variant)
+    add_fitted_lines(route, heading, fit)  # type: ignore[arg-type]
     if finish_xy is not None:
         route.add("finish", None, [finish_xy])
 
-    field_area_local = float(field_local.area)
-    covered = covered_area(chains, u, v_lo, v_hi, interval)
+    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
+    chains = convex_chains(u_ring, v_ring)
+    left_to_right = np.argsort(fit.index, kind="stable")
+    u = fit.u[left_to_right]
+    a, b = fit.v_start[left_to_right], fit.v_end[left_to_right]
+    covered = covered_area(chains, u, np.minimum(a, b), np.maximum(a, b), implement)
     return _assemble(
         route,
         frame=frame,
@@ -152,9 +183,10 @@ def plan_coverage(
         interval_m=interval,
         heading_deg=heading,
         line_count=len(u),
-        coverage_ratio=covered / field_area_local,
+        coverage_ratio=covered / float(field_local.area),
         speed_mps=speed,
-        track_width_m=track_width_m,
+        vehicle=machine,
+        implement_width_m=implement,
         area_m2=area_m2,
         started=started,
     )
@@ -172,7 +204,9 @@ def _plan_general(
     objective: Objective,
     passes: int,
     speed_mps: float,
-    track_width_m: float,
+    vehicle: Vehicle,
+    implement_width_m: float,
+    pattern: Pattern,
     area_m2: float,
     started: float,
 ) -> CoveragePlan:
@@ -185,6 +219,9 @@ def _plan_general(
         fixed_heading_deg=fixed_heading,
         objective=objective,
         headland_passes=passes,
+        vehicle=vehicle,
+        implement_width_m=implement_width_m,
+        pattern=pattern,
     )
     built = plan.route
     route = _Route(
@@ -202,7 +239,8 @@ def _plan_general(
         line_count=plan.line_count,
         coverage_ratio=plan.coverage_ratio,
         speed_mps=speed_mps,
-        track_width_m=track_width_m,
+        vehicle=vehicle,
+        implement_width_m=implement_width_m,
         area_m2=area_m2,
         started=started,
     )
@@ -239,23 +277,6 @@ class _Route:
         self.lines.extend(lines)
 
 
-def _add_lines(
-    route: _Route, heading: float, u: FloatArray, v_lo: FloatArray, v_hi: FloatArray, variant: int
-) -> None:
-    u_ord, v_from, v_to, index = ordered_line_ends(u, v_lo, v_hi, variant)
-    n = len(u_ord)
-    x, y = from_sweep(np.repeat(u_ord, 2), np.stack([v_from, v_to], axis=1).ravel(), heading)
-    first = len(route.x)
-    if first:
-        route.segments.append(("transit", None, first - 1, first))
-    line_of = cast("list[int | None]", np.repeat(index, 2).tolist())
-    route.extend(x, y, ["line_start", "line_end"] * n, line_of)
-    for k in range(n):
-        route.segments.append(("line", int(index[k]), first + 2 * k, first + 2 * k + 1))
-        if k + 1 < n:
-            route.segments.append(("turn", None, first + 2 * k + 1, first + 2 * k + 2))
-
-
 def _assemble(
     route: _Route,
     *,
@@ -267,7 +288,8 @@ def _assemble(
     line_count: int,
     coverage_ratio: float,
     speed_mps: float,
-    track_width_m: float,
+    vehicle: Vehicle,
+    implement_width_m: float,
     area_m2: float,
     started: float,
 ) -> CoveragePlan:
@@ -297,9 +319,7 @@ def _assemble(
         for kind, index, first, last in route.segments
     ]
     path_length = float(distance[-1])
-    estimated_time = path_length / speed_mps + pivot_time_s(
-        x, y, speed_mps=speed_mps, track_width_m=track_width_m
-    )
+    estimated_time = driving_time_s(x, y, speed_mps=speed_mps, turn_rate_dps=vehicle.turn_rate_dps)
     stats = PlanStats(
         area_m2=round(area_m2, 2),
         line_count=line_count,
@@ -312,6 +332,9 @@ def _assemble(
         angle_deg=round(heading_deg % 180.0, 6),
         estimated_time_s=round(estimated_time, 1),
         planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
+        implement_width_m=implement_width_m,
+        overlap_m=round(implement_width_m - interval_m, 6),
+        vehicle=asdict(vehicle),
     )
     return CoveragePlan(
         field_lonlat=field_lonlat,
@@ -320,4 +343,6 @@ def _assemble(
         stats=stats,
         interval_m=interval_m,
         cells_lonlat=tuple(frame.to_lonlat(cell) for cell in cells_local),
+        vehicle=vehicle,
+        implement_width_m=implement_width_m,
     )
