@@ -53,10 +53,6 @@ def jobs(draw: st.DrawFn) -> tuple[Polygon, float, tuple | None, tuple | None, i
 
 
 def plan_or_too_narrow(job: tuple) -> CoveragePlan | None:
-    import os
-
-    if os.environ.get("I9A_DUMP"):
-        print("JOB", job[0].wkb_hex, job[1:])
     field, interval, start, finish, passes = job
     try:
         return plan_coverage(
