@@ -8,7 +8,17 @@ from __future__ import annotations
 from fastapi import FastAPI
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
-from app.routers import auth, field_files, fields, health, pages, plans, runs, simulations
+from app.routers import (
+    auth,
+    field_files,
+    fields,
+    health,
+    pages,
+    plans,
+    runs,
+    simulations,
+    vehicles,
+)
 from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
 
@@ -53,6 +63,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router, prefix=API_PREFIX)
     app.include_router(auth.router, prefix=API_PREFIX)
     app.include_router(fields.router, prefix=API_PREFIX)
+    app.include_router(vehicles.router, prefix=API_PREFIX)
     register_error_handlers(app)
     app.add_middleware(
         BodySizeLimitMiddleware,

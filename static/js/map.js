@@ -20,6 +20,7 @@ import {
 } from "./format.js";
 import { setUpFields } from "./fields.js";
 import { drawPlan } from "./planlayer.js";
+import { fillVehicle, setUpVehicle, vehicleControls, vehicleRequest } from "./vehicle.js";
 
 /** Ketewel, Gianyar, Bali: the paper's field trial, a sensible first view for the farmers we serve. */
 const DEFAULT_VIEW = { lat: -8.6264, lng: 115.2981, zoom: 18 };
@@ -102,7 +103,7 @@ function showError(message, input = null) {
   clearError();
   ui.alert.textContent = message;
   setPanelOpen(true); // on a phone the alert would otherwise hide behind the map
-  const control = INPUT_CONTROLS[input];
+  const control = INPUT_CONTROLS[input] ?? vehicleControls()[input];
   if (control) {
     control.setAttribute("aria-invalid", "true");
     control.focus();
@@ -432,7 +433,13 @@ function buildRequest() {
       return null;
     }
   }
+  const machine = vehicleRequest();
+  if (machine.error) {
+    showError(machine.error, machine.input);
+    return null;
+  }
   return {
+    ...machine,
     name: ui.planName.value.trim() || null,
     field,
     interval_m: inputs.interval_m.value,
@@ -452,6 +459,7 @@ function fillForm(request, name) {
   ui.headland.value = String(request.headland_passes ?? 0);
   ui.speed.value = request.speed_mps ?? DEFAULT_SPEED_MPS;
   ui.planName.value = name ?? request.name ?? "";
+  fillVehicle(request);
 }
 
 // ---------------------------------------------------------------- plans
@@ -811,6 +819,7 @@ async function main() {
     onPlansChanged: () => refreshSavedPlans(),
   });
   wireControls();
+  setUpVehicle(dataset.apiUrl);
   setPanelOpen(false);
   refreshSavedPlans();
   ui.app.dataset.ready = "true"; // tests wait for this before clicking the map
