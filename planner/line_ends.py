@@ -359,7 +359,8 @@ def convex_lines(
     )
     # Narrower than the turning circle and the body: no turn can fit, say so.
     width = u_max - u_min
-    if len(fit.u) == 1 and n > 1 and width < 2.0 * turning_radius_m(vehicle) + vehicle.width_m:
+    too_narrow = width < 2.0 * turning_radius_m(vehicle) + vehicle.width_m
+    if len(fit.u) == 1 and width > d and too_narrow:
         raise InvalidParameterError(
             "vehicle",
             f"a {turning_radius_m(vehicle):g} m turning radius does not fit this "

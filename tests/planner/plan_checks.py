@@ -126,7 +126,9 @@ def turn_curvatures(curve: np.ndarray) -> np.ndarray:
     a, b, c = curve[:-2], curve[1:-1], curve[2:]
     ab, bc, ca = (np.hypot(*(q - p).T) for p, q in ((a, b), (b, c), (c, a)))
     cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
-    ok = (ab > 1e-3) & (bc > 1e-3) & (ca > 1e-3)
+    # A cusp (forwards, then backwards: Reeds–Shepp) folds the polyline back on itself.
+    onward = np.einsum("ij,ij->i", b - a, c - b) > 0.0
+    ok = (ab > 1e-3) & (bc > 1e-3) & (ca > 1e-3) & onward
     return np.asarray(2.0 * cross[ok] / (ab * bc * ca)[ok])
 
 
