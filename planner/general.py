@@ -687,53 +687,50 @@ def add_fitted_lines(
     n = len(fit.u)
     if n == 0:
         return
-    x, y = from_sweep(
-        np.repeat(fit.u, 2), np.stack([fit.v_start, fit.v_end], axis=1).ravel(), heading
-    )
-    tx, ty = from_sweep(fit.turns.xy[:, 0], fit.turns.xy[:, 1], heading)
-    offsets = fit.turns.offsets.tolist()
+    offsets = fit.turns.offsets
+    inner = np.diff(offsets) - 2 if n > 1 else np.zeros(0, dtype=np.int64)
+    # Driving order: s0 e0 (turn 0) s1 e1 (turn 1) … as blocks of 2 + inner points.
+    sizes = np.full(n, 2, dtype=np.int64)
+    sizes[:-1] += inner
+    block = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    total = int(sizes.sum())
+    u = np.empty(total)
+    v = np.empty(total)
+    u[block], v[block] = fit.u, fit.v_start
+    u[block + 1], v[block + 1] = fit.u, fit.v_end
+    if n > 1:
+        keep = np.ones(len(fit.turns.xy), dtype=bool)
+        keep[offsets[:-1]] = False
+        keep[offsets[1:] - 1] = False
+        slots = np.ones(total, dtype=bool)
+        slots[block] = False
+        slots[block + 1] = False
+        u[slots], v[slots] = fit.turns.xy[keep, 0], fit.turns.xy[keep, 1]
+    x, y = from_sweep(u, v, heading)
+    roles: list[WaypointRole] = ["turn"] * total
+    lines: list[int | None] = [None] * total
     line_of = fit.index.tolist()
-    xl, yl = x.tolist(), y.tolist()
-    txl, tyl = tx.tolist(), ty.tolist()
-    xs: list[float] = []
-    ys: list[float] = []
-    roles: list[WaypointRole] = []
-    lines: list[int | None] = []
+    starts = block.tolist()
+    for k in range(n):
+        roles[starts[k]] = "line_start"
+        roles[starts[k] + 1] = "line_end"
+        lines[starts[k]] = lines[starts[k] + 1] = line_of[k]
+    skip = 1 if joined else 0
     if joined:
         route.roles[-1] = "line_start"
         route.lines[-1] = line_of[0]
-        position = len(route.x) - 1
-    else:
-        position = len(route.x)
-        if position and route.roles[-1] == "start":
-            route.segments.append(("transit", None, position - 1, position))
-        xs.append(xl[0])
-        ys.append(yl[0])
-        roles.append("line_start")
-        lines.append(line_of[0])
+    base = len(route.x) - skip
+    if not joined and base and route.roles[-1] == "start":
+        route.segments.append(("transit", None, base - 1, base))
     for k in range(n):
-        if k > 0:
-            inner = range(offsets[k - 1] + 1, offsets[k] - 1)
-            xs.extend(txl[i] for i in inner)
-            ys.extend(tyl[i] for i in inner)
-            roles.extend(["turn"] * len(inner))
-            lines.extend([None] * len(inner))
-            xs.append(xl[2 * k])
-            ys.append(yl[2 * k])
-            roles.append("line_start")
-            lines.append(line_of[k])
-            route.segments.append(("turn", None, position, position + len(inner) + 1))
-            position += len(inner) + 1
-        xs.append(xl[2 * k + 1])
-        ys.append(yl[2 * k + 1])
-        roles.append("line_end")
-        lines.append(line_of[k])
-        route.segments.append(("line", line_of[k], position, position + 1))
-        position += 1
-    route.x.extend(xs)
-    route.y.extend(ys)
-    route.roles.extend(roles)
-    route.lines.extend(lines)
+        first = base + starts[k]
+        route.segments.append(("line", line_of[k], first, first + 1))
+        if k + 1 < n:
+            route.segments.append(("turn", None, first + 1, base + starts[k + 1]))
+    route.x.extend(x[skip:].tolist())
+    route.y.extend(y[skip:].tolist())
+    route.roles.extend(roles[skip:])
+    route.lines.extend(lines[skip:])
 
 
 def _first_ring_point(rings: list[LinearRing]) -> tuple[float, float]:

@@ -5,6 +5,7 @@ This module only chains the stages; the geometry lives in the stage modules.
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -301,8 +302,9 @@ def _assemble(
     lat = np.round(lat, LONLAT_DECIMALS)
     lon_list, lat_list = lon.tolist(), lat.tolist()
     waypoints = tuple(
-        Waypoint(seq, lon_list[seq], lat_list[seq], route.roles[seq], route.lines[seq])
-        for seq in range(len(x))
+        itertools.starmap(
+            Waypoint, zip(range(len(x)), lon_list, lat_list, route.roles, route.lines, strict=True)
+        )
     )
     step = np.hypot(np.diff(x), np.diff(y))
     distance = np.concatenate(([0.0], np.cumsum(step)))

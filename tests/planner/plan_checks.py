@@ -128,7 +128,8 @@ def turn_curvatures(curve: np.ndarray) -> np.ndarray:
     cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
     # A cusp (forwards, then backwards: Reeds–Shepp) folds the polyline back on itself.
     onward = np.einsum("ij,ij->i", b - a, c - b) > 0.0
-    ok = (ab > 1e-3) & (bc > 1e-3) & (ca > 1e-3) & onward
+    # Waypoints are rounded to 0.1 mm: steps under 5 cm say nothing about curvature.
+    ok = (ab > 0.05) & (bc > 0.05) & (ca > 0.05) & onward
     return np.asarray(2.0 * cross[ok] / (ab * bc * ca)[ok])
 
 

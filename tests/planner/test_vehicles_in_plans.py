@@ -38,7 +38,8 @@ def jobs(draw: st.DrawFn) -> tuple[Polygon, float, str, int]:
         list(local.exterior.coords), [list(h.coords) for h in local.interiors], at=(110.4, -7.8)
     )
     size = math.sqrt(local.area)
-    interval = draw(st.floats(max(0.5, size / 40), min(12.0, max(0.5, size / 6))))
+    low = max(0.5, size / 40)
+    interval = draw(st.floats(low, max(low, min(12.0, size / 6))))
     return field, interval, draw(st.sampled_from(sorted(PRESETS))), draw(st.integers(0, 1))
 
 
