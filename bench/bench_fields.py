@@ -88,9 +88,9 @@ def run_vehicle(datasets: dict[str, list[tuple[str, Polygon]]], vehicle: str) ->
     return [
         f"### All {len(everything)} fields at {INTERVAL_M:g} m with `{vehicle}` (§11)",
         "",
-        f"`python -m bench.run fields`: each field planned once, heading searched, turns the "
-        f"vehicle drives, its body kept inside; then each plan checked with shapely: the "
-        f"path's length outside the field eroded by half the vehicle's width.",
+        "`python -m bench.run fields`: each field planned once, heading searched, turns the "
+        "vehicle drives, its body kept inside; then each plan checked with shapely: the "
+        "path's length outside the field eroded by half the vehicle's width.",
         "",
         "| vehicle | fields | time s | CPU s | failures | path outside m | median coverage | "
         "budget | verdict |",
