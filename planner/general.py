@@ -199,7 +199,7 @@ def plan_general(
     >>> plan = plan_general(ell, interval_m=4.0, start_xy=None, finish_xy=None,
     ...                     fixed_heading_deg=135.0, objective="shortest_path", headland_passes=0)
     >>> len(plan.cells_local), plan.line_count, round(plan.lines_coverage_ratio, 3)
-    (3, 23, 0.97)
+    (3, 23, 0.911)
     """
     field_local = shapely.orient_polygons(field_local)
     d = float(interval_m)

@@ -101,9 +101,9 @@ def plan_coverage(
     >>> from shapely import Polygon
     >>> field = Polygon([(115.298, -8.6265), (115.29813989, -8.62649238),
     ...                  (115.29814712, -8.62631751), (115.29800448, -8.62632237)])
-    >>> plan = plan_coverage(field, interval_m=4.0)
-    >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]]
-    (4, ['line_start', 'line_end', 'line_start'])
+    >>> plan = plan_coverage(field, interval_m=4.0)   # a hand tractor: it pivots between lines
+    >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]], plan.vehicle.preset
+    (4, ['line_start', 'line_end', 'turn'], 'hand_tractor')
     """
     started = time.perf_counter()
     interval = validation.validate_interval(interval_m)

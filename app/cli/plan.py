@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from app.cli.common import fail, plan_field_spec, read_field_file, write_output
+from app.cli.common import fail, plan_field_spec, read_field_file, read_json_file, write_output
 
 
 class OutputFormat(StrEnum):
