@@ -19,6 +19,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from app.auth import (
+    MAX_ID,
     Access,
     new_api_token,
     new_secret,
@@ -311,7 +312,8 @@ def authenticate_password(session: Session, username: str, password: str, addres
     SignInError
         If either is wrong (the same answer, and about the same time, for both).
     """
-    name = username.strip()[:NAME_MAX_LENGTH]
+    # No stored name has a NUL (check_username); PostgreSQL could not even compare one.
+    name = username.replace("\x00", "").strip()[:NAME_MAX_LENGTH]
     _check_throttle(session, name, address)
     user = session.scalar(select(User).where(User.username == name))
     ok = verify_password(
@@ -390,3 +392,94 @@ def sign_up_first(session: Session, username: str, password: str, organisation: 
             "(tillpath users create)"
         )
     return create_user(session, username, password, organisation=organisation, role="owner")
+
+
+# --- Members (owners manage them) -------------------------------------------------------------
+
+
+def list_members(session: Session, organisation_id: int) -> list[tuple[User, Membership]]:
+    """Return the organisation's members with their memberships, by username."""
+    rows = session.execute(
+        select(User, Membership)
+        .join(Membership, Membership.user_id == User.id)
+        .where(Membership.organisation_id == organisation_id)
+        .order_by(User.username)
+    ).all()
+    return [(u, m) for u, m in rows]
+
+
+def _membership(session: Session, organisation_id: int, user_id: int) -> Membership:
+    if not 1 <= user_id <= MAX_ID:  # not a 32-bit key: no such member (and no SQL error)
+        raise NotFoundError("member", user_id)
+    found = session.scalar(
+        select(Membership).where(
+            Membership.organisation_id == organisation_id, Membership.user_id == user_id
+        )
+    )
+    if found is None:
+        raise NotFoundError("member", user_id)
+    return found
+
+
+def _keep_an_owner(session: Session, membership: Membership) -> None:
+    if membership.role != "owner":
+        return
+    owners = session.scalar(
+        select(func.count())
+        .select_from(Membership)
+        .where(Membership.organisation_id == membership.organisation_id, Membership.role == "owner")
+    )
+    if (owners or 0) <= 1:
+        raise ConflictError("role: the organisation would have no owner left; make another first")
+
+
+def add_member(
+    session: Session, organisation_id: int, username: str, role: str, password: str | None
+) -> tuple[User, Membership]:
+    """Give a user (made if ``password`` is given and none exists) a role in the organisation.
+
+    Raises
+    ------
+    AccountError
+        For an unknown user without a password, or a bad name or password.
+    """
+    check_role(role)
+    name = check_username(username)
+    user = session.scalar(select(User).where(User.username == name))
+    if user is None:
+        if password is None:
+            raise AccountError(f"username: no user called {name!r}; give a password to make one")
+        user = User(username=name, password_hash=hash_password(check_password(password)))
+        session.add(user)
+        session.flush()
+    member = session.scalar(
+        select(Membership).where(
+            Membership.organisation_id == organisation_id, Membership.user_id == user.id
+        )
+    )
+    if member is None:
+        member = Membership(user_id=user.id, organisation_id=organisation_id, role=role)
+        session.add(member)
+    else:
+        if role != "owner":
+            _keep_an_owner(session, member)
+        member.role = role
+    session.commit()
+    return user, member
+
+
+def change_member_role(session: Session, organisation_id: int, user_id: int, role: str) -> None:
+    """Change a member's role; the last owner stays an owner."""
+    member = _membership(session, organisation_id, user_id)
+    if role != "owner":
+        _keep_an_owner(session, member)
+    member.role = check_role(role)
+    session.commit()
+
+
+def remove_member(session: Session, organisation_id: int, user_id: int) -> None:
+    """Take a user out of the organisation; the last owner stays."""
+    member = _membership(session, organisation_id, user_id)
+    _keep_an_owner(session, member)
+    session.delete(member)
+    session.commit()

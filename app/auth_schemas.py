@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.auth_models import NAME_MAX_LENGTH
+from app.schemas import StoredText
 
 RoleName = Literal["viewer", "planner", "owner"]
 
@@ -28,7 +29,7 @@ class SignUpBody(BaseModel):
 
     username: str = Field(min_length=1, max_length=NAME_MAX_LENGTH)
     password: str = Field(min_length=8, max_length=1024)
-    organisation: str = Field(
+    organisation: StoredText = Field(
         default="default",
         min_length=1,
         max_length=NAME_MAX_LENGTH,
@@ -85,7 +86,7 @@ class TokenCreate(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    name: str = Field(default="", max_length=NAME_MAX_LENGTH, description="A label.")
+    name: StoredText = Field(default="", max_length=NAME_MAX_LENGTH, description="A label.")
     device: bool = Field(
         default=False,
         description="A device token for a tractor's logger: posts fixes to live runs of the "
@@ -118,3 +119,40 @@ class TokenList(BaseModel):
     """The tokens the user may see and revoke."""
 
     items: list[TokenRead]
+
+
+class MemberRead(BaseModel):
+    """A member of the organisation and their role."""
+
+    user_id: int
+    username: str
+    role: RoleName
+
+
+class MemberList(BaseModel):
+    """The organisation's members, by username."""
+
+    items: list[MemberRead]
+
+
+class MemberCreate(BaseModel):
+    """Body of ``POST /api/members``: add a user (made when a password is given) with a role."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    username: str = Field(min_length=1, max_length=NAME_MAX_LENGTH)
+    role: RoleName = "viewer"
+    password: str | None = Field(
+        default=None,
+        max_length=1024,
+        description="For a new user: their password (at least 8 characters). An existing "
+        "user keeps theirs.",
+    )
+
+
+class MemberUpdate(BaseModel):
+    """Body of ``PATCH /api/members/{user_id}``."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    role: RoleName

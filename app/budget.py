@@ -29,6 +29,20 @@ _context = multiprocessing.get_context("forkserver")
 _context.set_forkserver_preload(["planner"])
 
 
+def warm_up() -> None:
+    """Start the fork server in the background, so the first large field does not wait for it.
+
+    Starting it imports the planner in a fresh interpreter (about a second); a request that
+    paid for it would spend most of its budget there.
+    """
+    import multiprocessing.forkserver
+    import threading
+
+    threading.Thread(
+        target=multiprocessing.forkserver.ensure_running, name="forkserver-warm-up", daemon=True
+    ).start()
+
+
 class PlanningBudgetError(PlannerError):
     """Planning the field would take longer than the budget of one request.
 

@@ -18,6 +18,8 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from app.i18n import DEFAULT_LANGUAGE, negotiate_language
+from app.i18n_errors import translate_detail
 from app.tracks import TrackFormatError
 from navigation import NavigationError
 from planner import InvalidFieldError, InvalidParameterError, PlannerError, PlanTooLargeError
@@ -135,32 +137,47 @@ def status_for(exc: BaseException) -> int:
     return 500
 
 
-def error_response(exc: Exception) -> JSONResponse:
-    """Build the JSON answer for ``exc``: its status from the table, ``str(exc)`` as detail."""
+def error_response(exc: Exception, lang: str = DEFAULT_LANGUAGE) -> JSONResponse:
+    """Build the JSON answer for ``exc``: its status from the table, ``str(exc)`` as detail.
+
+    ``lang`` is the language of the detail (``app.i18n_errors`` translates it).
+    """
     if isinstance(exc, RequestValidationError):
         detail = format_validation_errors(exc.errors())
     else:
         detail = str(exc)
     headers: dict[str, str] | None = getattr(exc, "headers", None)
-    return JSONResponse({"detail": detail}, status_code=status_for(exc), headers=headers)
-
-
-async def _handle_listed(_request: Request, exc: Exception) -> JSONResponse:
-    return error_response(exc)
-
-
-async def _handle_http_exception(_request: Request, exc: Exception) -> JSONResponse:
-    assert isinstance(exc, StarletteHTTPException)
-    if exc.status_code == 400 and exc.detail == _FASTAPI_BODY_PARSE_ERROR:
-        return JSONResponse({"detail": "body: is not valid JSON text"}, status_code=422)
     return JSONResponse(
-        {"detail": str(exc.detail)}, status_code=exc.status_code, headers=exc.headers
+        {"detail": translate_detail(detail, lang)}, status_code=status_for(exc), headers=headers
     )
 
 
-async def _handle_unexpected(_request: Request, exc: Exception) -> JSONResponse:
+def _language(request: Request) -> str:
+    """Return the language the request asks its errors in (``Accept-Language``)."""
+    return negotiate_language(request.headers.get("accept-language"))
+
+
+async def _handle_listed(request: Request, exc: Exception) -> JSONResponse:
+    return error_response(exc, _language(request))
+
+
+async def _handle_http_exception(request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, StarletteHTTPException)
+    lang = _language(request)
+    if exc.status_code == 400 and exc.detail == _FASTAPI_BODY_PARSE_ERROR:
+        detail = translate_detail("body: is not valid JSON text", lang)
+        return JSONResponse({"detail": detail}, status_code=422)
+    return JSONResponse(
+        {"detail": translate_detail(str(exc.detail), lang)},
+        status_code=exc.status_code,
+        headers=exc.headers,
+    )
+
+
+async def _handle_unexpected(request: Request, exc: Exception) -> JSONResponse:
     logger.exception("unhandled error", exc_info=exc)
-    return JSONResponse({"detail": "internal error"}, status_code=500)
+    detail = translate_detail("internal error", _language(request))
+    return JSONResponse({"detail": detail}, status_code=500)
 
 
 def register_error_handlers(app: FastAPI) -> None:
@@ -216,6 +233,8 @@ def _problem(error: Mapping[str, Any]) -> str:
     if kind in ("too_long", "string_too_long"):
         limit = ctx.get("max_length")
         return f"is too long (at most {limit} characters)" if limit else "is too long"
+    if kind == "value_error" and ctx.get("error") is not None:
+        return str(ctx["error"])  # a validator's own sentence
     if kind in ("too_short", "string_too_short"):
         return "is too short"
     if kind == "greater_than_equal":
@@ -320,7 +339,7 @@ class BodySizeLimitMiddleware:
         limit, upload = self._limit(scope)
         too_large = UploadTooLargeError(limit) if upload else BodyTooLargeError(limit)
         if _declared_length(scope) > limit:
-            await error_response(too_large)(scope, receive, send)
+            await error_response(too_large, _scope_language(scope))(scope, receive, send)
             return
 
         chunks: list[bytes] = []
@@ -332,7 +351,7 @@ class BodySizeLimitMiddleware:
             chunk = message.get("body", b"")
             size += len(chunk)
             if size > limit:
-                await error_response(too_large)(scope, receive, send)
+                await error_response(too_large, _scope_language(scope))(scope, receive, send)
                 return
             chunks.append(chunk)
             if not message.get("more_body", False):
@@ -348,6 +367,13 @@ class BodySizeLimitMiddleware:
             return await receive()
 
         await self.app(scope, replay, send)
+
+
+def _scope_language(scope: Scope) -> str:
+    for key, value in scope.get("headers", ()):
+        if key == b"accept-language":
+            return negotiate_language(value.decode("latin-1"))
+    return DEFAULT_LANGUAGE
 
 
 def _declared_length(scope: Scope) -> int:

@@ -8,7 +8,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.models import PLAN_NAME_MAX_LENGTH
-from app.schemas import Position
+from app.schemas import Position, StoredText
 
 #: Longest notes of a field [characters].
 NOTES_MAX_LENGTH = 10_000
@@ -52,11 +52,13 @@ class FieldCreate(BaseModel):
         },
     )
 
-    name: str = Field(min_length=1, max_length=PLAN_NAME_MAX_LENGTH, description="Field name.")
+    name: StoredText = Field(
+        min_length=1, max_length=PLAN_NAME_MAX_LENGTH, description="Field name."
+    )
     boundary: dict[str, Any] = Field(description=_BOUNDARY)
     start: Position | None = Field(default=None, description="[lon, lat] gate to enter.")
     finish: Position | None = Field(default=None, description="[lon, lat] gate to leave.")
-    notes: str = Field(default="", max_length=NOTES_MAX_LENGTH, description="Free text.")
+    notes: StoredText = Field(default="", max_length=NOTES_MAX_LENGTH, description="Free text.")
 
 
 class FieldUpdate(BaseModel):
@@ -64,11 +66,11 @@ class FieldUpdate(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    name: str | None = Field(default=None, min_length=1, max_length=PLAN_NAME_MAX_LENGTH)
+    name: StoredText | None = Field(default=None, min_length=1, max_length=PLAN_NAME_MAX_LENGTH)
     boundary: dict[str, Any] | None = Field(default=None, description=_BOUNDARY)
     start: Position | None = None
     finish: Position | None = None
-    notes: str | None = Field(default=None, max_length=NOTES_MAX_LENGTH)
+    notes: StoredText | None = Field(default=None, max_length=NOTES_MAX_LENGTH)
 
 
 class FieldRead(BaseModel):

@@ -6,6 +6,7 @@ Run it with ``tillpath serve`` (uvicorn's factory mode: ``app.main:create_app``)
 from __future__ import annotations
 
 from fastapi import FastAPI
+from starlette.middleware.gzip import GZipMiddleware
 
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
 from app.routers import (
@@ -13,6 +14,7 @@ from app.routers import (
     field_files,
     fields,
     health,
+    members,
     pages,
     plans,
     runs,
@@ -23,6 +25,8 @@ from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
 
 API_PREFIX = "/api"
+#: Answers smaller than this go uncompressed: gzip's header would eat the gain [bytes].
+GZIP_MINIMUM_BYTES = 1000
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -44,7 +48,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         description=(
             "Plan back-and-forth coverage paths over a field, store them and download their "
             "waypoints. Coordinates are WGS84 `[lon, lat]`; errors are "
-            '`{"detail": "<input>: <problem>"}`.'
+            '`{"detail": "<input>: <problem>"}`.\n\n'
+            "Every route but health, sign-in and the page needs a token "
+            "(`Authorization: Bearer …`) or the page's session cookie, whose writes also send "
+            "`X-CSRF-Token`. A request acts in one organisation: `X-Organisation: <id>` if "
+            "given, else the one chosen on the page, else the user's first. Another "
+            "organisation's rows are 404; a missing role is 403 (docs/accounts.md)."
         ),
         version="0.1.0",
         # /docs is served offline by the pages router; ReDoc would need a CDN.
@@ -64,6 +73,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(auth.router, prefix=API_PREFIX)
     app.include_router(fields.router, prefix=API_PREFIX)
     app.include_router(vehicles.router, prefix=API_PREFIX)
+    app.include_router(members.router, prefix=API_PREFIX)
     register_error_handlers(app)
     app.add_middleware(
         BodySizeLimitMiddleware,
@@ -74,6 +84,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         SecurityHeadersMiddleware,
         csp=content_security_policy([settings.satellite_tile_url, settings.street_tile_url]),
     )
+
+    # Outermost: every answer over 1 KB is gzip-compressed when the client accepts it (a plan's
+    # GeoJSON, a simulation, the page's libraries: a rural mobile link pays for every byte).
+    app.add_middleware(GZipMiddleware, minimum_size=GZIP_MINIMUM_BYTES)
 
     pages.mount_pages(app)
     return app

@@ -8,9 +8,9 @@ command line and the planner give the same message for the same mistake.
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from app.models import PLAN_NAME_MAX_LENGTH
 
@@ -51,6 +51,17 @@ class VehicleSpec(BaseModel):
         return self.model_dump(exclude_none=True)
 
 
+def _no_nul(value: str) -> str:
+    """Refuse NUL characters: PostgreSQL text cannot hold them (it would be a 500)."""
+    if "\x00" in value:
+        raise ValueError("must not contain NUL characters")
+    return value
+
+
+#: Text a person typed that is stored: any characters but NUL.
+StoredText = Annotated[str, AfterValidator(_no_nul)]
+
+
 class PlanCreate(BaseModel):
     """Body of ``POST /api/plans`` and ``POST /api/plans/preview`` (product.md §3 inputs)."""
 
@@ -81,7 +92,7 @@ class PlanCreate(BaseModel):
         },
     )
 
-    name: str | None = Field(
+    name: StoredText | None = Field(
         default=None,
         max_length=PLAN_NAME_MAX_LENGTH,
         description="Plan name; default: the field's `name` property, if any.",
@@ -131,7 +142,8 @@ class PlanCreate(BaseModel):
     )
     pattern: Pattern = Field(
         default="boustrophedon",
-        description="Line order: `boustrophedon`, `snake` (skip lines for a turning radius).",
+        description="boustrophedon (lines back and forth), snake (skipping lines so that "
+        "turns need no loops) or spiral (rounds inward, the core back and forth).",
     )
 
 
@@ -154,6 +166,9 @@ class PlanStatsRead(BaseModel):
     implement_width_m: float | None = None
     overlap_m: float | None = None
     vehicle: dict[str, Any] | None = None
+    coverage_given_up_pp: float = Field(
+        0.0, description="How far below the best heading's coverage the plan is, in points"
+    )
 
 
 class WaypointRead(BaseModel):
@@ -285,6 +300,25 @@ class SimulationRead(BaseModel):
         description="GeoJSON FeatureCollection: LineStrings `source` true, estimated, gps, "
         "with `time_s` per vertex."
     )
+
+
+class SimulationSummary(BaseModel):
+    """A simulation in a plan's list: its configuration and metrics, no tracks."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    id: int
+    plan_id: int
+    created_at: dt.datetime
+    config: dict[str, Any]
+    metrics: MetricsRead
+
+
+class SimulationList(BaseModel):
+    """A plan's simulations, newest first."""
+
+    items: list[SimulationSummary]
+    total: int
 
 
 # --- Field runs (product.md §8) ----------------------------------------------------------

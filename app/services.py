@@ -26,7 +26,15 @@ from app import auth, budget
 from app.auth import Access, owned, read_owned
 from app.db import Base
 from app.models import PLAN_NAME_MAX_LENGTH, Plan, Simulation, utc_now
-from app.schemas import ExportFormat, PlanCreate, PlanList, PlanSummary, SimulationCreate
+from app.schemas import (
+    ExportFormat,
+    PlanCreate,
+    PlanList,
+    PlanSummary,
+    SimulationCreate,
+    SimulationList,
+    SimulationSummary,
+)
 from navigation import GuidanceParams, SimulationConfig, simulate
 from navigation.export import simulation_to_geojson
 from planner.export import (
@@ -164,12 +172,26 @@ def read_plan(session: Session, plan_id: int, access: Access) -> Plan:
 
 
 def list_plans(
-    session: Session, access: Access, *, limit: int, offset: int, field_id: int | None = None
+    session: Session,
+    access: Access,
+    *,
+    limit: int,
+    offset: int,
+    field_id: int | None = None,
+    q: str | None = None,
 ) -> PlanList:
-    """Return a page of the organisation's plans, newest first, without their geometry."""
+    """Return a page of the organisation's plans, newest first, without their geometry.
+
+    ``q`` keeps the plans whose name contains it (any case); ``total`` counts those.
+    """
     query = owned(Plan, access)
     if field_id is not None:
         query = query.where(Plan.field_id == field_id)
+    if q and q.strip():
+        pattern = (
+            "%" + q.strip().replace("\\", "\\\\").replace("%", "\\%").replace("_", "\\_") + "%"
+        )
+        query = query.where(Plan.name.ilike(pattern, escape="\\"))
     total = session.scalar(select(func.count()).select_from(query.subquery())) or 0
     rows = session.execute(
         query.with_only_columns(Plan.id, Plan.name, Plan.created_at, Plan.stats, Plan.field_id)
@@ -301,6 +323,17 @@ def read_simulation(session: Session, simulation_id: int, access: Access) -> Sim
         If there is no such simulation (or it is another organisation's).
     """
     return read_stored(session, Simulation, simulation_id, access, kind="simulation")
+
+
+def list_simulations(session: Session, plan: Plan, access: Access) -> SimulationList:
+    """Return the stored simulations of ``plan``, newest first, without their tracks."""
+    rows = session.scalars(
+        owned(Simulation, access)
+        .where(Simulation.plan_id == plan.id)
+        .order_by(Simulation.created_at.desc(), Simulation.id.desc())
+    ).all()
+    items = [SimulationSummary.model_validate(row) for row in rows]
+    return SimulationList(items=items, total=len(items))
 
 
 def export_simulation_gpx(session: Session, simulation: Simulation, access: Access) -> ExportFile:

@@ -15,7 +15,7 @@ import time
 import urllib.error
 import urllib.request
 import uuid
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -143,6 +143,8 @@ def running_server(
     log: Path | None = None,
     serve_args: Sequence[str] = (),
     timeout_s: float = 60.0,
+    first_account: bool = True,
+    env: Mapping[str, str] | None = None,
 ) -> Iterator[ServerUrl]:
     """Serve the app with ``tillpath serve`` until the block ends; yield its base URL.
 
@@ -159,13 +161,22 @@ def running_server(
         More ``tillpath serve`` options, e.g. ``("--workers", "1")``.
     timeout_s : float
         How long to wait for ``/api/health`` [s].
+    first_account : bool
+        Give the database its first account before the server starts; without it the
+        server asks for one (``url.account`` then names an account that does not exist).
+    env : mapping, optional
+        More environment variables of the server (``TILLPATH_*`` settings).
 
     Raises
     ------
     ServerStartError
         If the server exits or does not answer in time (with its log, if kept).
     """
-    account = seed_account(database_url)
+    account = (
+        seed_account(database_url)
+        if first_account
+        else Account(TEST_USERNAME, TEST_PASSWORD, 0, "tp_no-account-yet")
+    )
     port = free_port()
     base = ServerUrl(f"http://127.0.0.1:{port}", account)
     env = {
@@ -173,6 +184,7 @@ def running_server(
         "TILLPATH_DATABASE_URL": database_url,
         "TILLPATH_SATELLITE_TILE_URL": NO_TILES,
         "TILLPATH_STREET_TILE_URL": NO_TILES,
+        **(env or {}),
     }
     command = [
         *tillpath_command(),

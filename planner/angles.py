@@ -1,6 +1,15 @@
-"""The line-angle search (R5): which headings to try, and which (heading, variant) wins."""
+"""The line-angle search (R5): which headings to try, and which (heading, variant) wins.
+
+Coverage comes first: a heading is a candidate only if its coverage is within
+:data:`COVERAGE_SLACK` of the best candidate's, and among those the objective decides. The
+coarse candidates (every edge direction and a 1° sweep) are then refined locally around the
+best few at 0.1°, so a plan is as short as a 0.1° brute force would find.
+"""
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +30,21 @@ MAX_EDGE_HEADINGS = 180
 MAX_LINES = 20_000
 #: Path lengths closer than this count as equal, so ties break the same way every time [m].
 _TIE_M = 1e-6
+#: A heading whose coverage is more than this below the best candidate's is never chosen
+#: (R5: 0.2 percentage points).
+COVERAGE_SLACK = 0.002
+#: Local refinement: the best this many distinct eligible headings are swept ...
+REFINE_SEEDS = 8
+#: ... at this step [deg], nine on each side (filling the 1° sweep).
+REFINE_STEP_DEG = 0.1
+#: Rounds of refinement: the first around the seeds, the next around a winner that moved.
+REFINE_ROUNDS = 3
+#: Seeds may be this far below the best coverage (the sweep between them may not be).
+SEED_SLACK = 0.007
+#: Seeds of one refinement round are at least this far apart [deg].
+_SEED_GAP_DEG = 1.5
+#: The refinement sweep around a centre, in steps of REFINE_STEP_DEG.
+_OFFSETS = REFINE_STEP_DEG * np.arange(-9, 10)
 
 
 def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> FloatArray:
@@ -67,12 +91,14 @@ def select_plan(
     objective: Objective,
     *,
     interval_m: float | None = None,
+    eligible: npt.NDArray[np.bool_] | None = None,
 ) -> tuple[int, int]:
     """Pick the (heading index, variant index) the objective prefers.
 
     ``shortest_path`` minimises the whole path; ``fewest_lines`` minimises the line count,
     then the path. Ties go to the first heading and variant, so the choice is deterministic.
-    Headings that need more than :data:`MAX_LINES` lines are never chosen.
+    Headings that need more than :data:`MAX_LINES` lines, and those not ``eligible`` (if
+    given: the coverage rule of R5), are never chosen.
 
     Raises
     ------
@@ -98,9 +124,208 @@ def select_plan(
             f"plans at most {MAX_LINES:,}: choose a wider interval or a smaller field",
         )
     total = np.round(lengths.total / _TIE_M) * _TIE_M
-    total = np.where((counts <= MAX_LINES)[:, None], total, np.inf)
+    allowed = counts <= MAX_LINES
+    if eligible is not None and (allowed & eligible).any():
+        allowed = allowed & eligible
+    total = np.where(allowed[:, None], total, np.inf)
     if objective == "fewest_lines":
-        fewest = line_counts_per_heading == line_counts_per_heading.min()
+        fewest = counts == counts[allowed].min()
         total = np.where(fewest[:, None], total, np.inf)
     flat = int(np.argmin(total))
     return flat // 4, flat % 4
+
+
+#: ``lengths(headings) -> (path lengths of the four variants, line counts)``.
+LengthScorer = Callable[[FloatArray], tuple[VariantLengths, IntArray]]
+#: ``coverage(headings) -> coverage ratios``.
+CoverageScorer = Callable[[FloatArray], FloatArray]
+
+
+@dataclass(frozen=True, slots=True)
+class HeadingChoice:
+    """The heading the search settled on.
+
+    Attributes
+    ----------
+    heading_deg : float
+    variant : int
+        Index into :data:`planner.ordering.VARIANTS`.
+    coverage_ratio : float
+        Its coverage, as the scorer gave it.
+    coverage_given_up_pp : float
+        How far below the best candidate's coverage it is, in percentage points (≥ 0).
+    """
+
+    heading_deg: float
+    variant: int
+    coverage_ratio: float
+    coverage_given_up_pp: float
+
+
+def coverage_eligible(coverage: FloatArray) -> npt.NDArray[np.bool_]:
+    """Headings whose coverage is within :data:`COVERAGE_SLACK` of the best (R5).
+
+    Examples
+    --------
+    >>> coverage_eligible(np.array([0.998, 0.955, 0.9965, 0.9959])).tolist()
+    [True, False, True, False]
+    """
+    return np.asarray(coverage >= coverage.max() - COVERAGE_SLACK - 1e-12)
+
+
+def search_headings(
+    lengths_of: LengthScorer,
+    coverage_of: CoverageScorer,
+    headings_deg: FloatArray,
+    objective: Objective,
+    *,
+    interval_m: float | None = None,
+    refine: bool = True,
+) -> HeadingChoice:
+    """Choose the heading and variant: coverage first, then ``objective``; refined locally.
+
+    Every coarse candidate is scored for length and coverage; the best few eligible ones
+    (:func:`coverage_eligible`) are then swept at :data:`REFINE_STEP_DEG`; the refined headings
+    that would beat the coarse choice are scored for coverage too, and the rule holds over
+    every heading scored.
+
+    Parameters
+    ----------
+    lengths_of, coverage_of : callable
+        Score an array of headings: path lengths of the four variants and line counts; and
+        coverage ratios.
+    headings_deg : ndarray
+        The coarse candidates (:func:`candidate_headings`).
+    objective : {"shortest_path", "fewest_lines"}
+    interval_m : float, optional
+        For the error message of a plan too large.
+    refine : bool
+        Sweep finer around the best candidates (off for a fixed heading).
+
+    Returns
+    -------
+    HeadingChoice
+
+    Raises
+    ------
+    PlanTooLargeError
+        If every heading needs more than :data:`MAX_LINES` lines.
+
+    Examples
+    --------
+    Path length is least at 37.2°, coverage the same everywhere: the 1° sweep finds 37°, the
+    refinement 37.2°.
+
+    >>> from planner.ordering import VariantLengths
+    >>> def lengths_of(h):
+    ...     total = 100.0 + np.abs(h - 37.2)
+    ...     return VariantLengths(total, np.zeros((len(h), 4)), np.zeros((len(h), 4))), np.full(
+    ...         len(h), 3)
+    >>> choice = search_headings(lengths_of, lambda h: np.ones(len(h)), np.arange(0.0, 180.0),
+    ...                          "shortest_path")
+    >>> round(choice.heading_deg, 6), choice.coverage_given_up_pp
+    (37.2, 0.0)
+    """
+    headings = np.asarray(headings_deg, dtype=float)
+    lengths, counts = lengths_of(headings)
+    # One heading (a fixed angle) gives nothing up, whatever its coverage.
+    coverage = coverage_of(headings) if len(headings) > 1 else np.ones(1)
+    affordable = counts <= MAX_LINES
+    eligible = affordable & coverage_eligible(np.where(affordable, coverage, -np.inf))
+    best, variant = select_plan(
+        lengths, counts, objective, interval_m=interval_m, eligible=eligible
+    )
+    best_coverage = float(coverage[affordable].max()) if affordable.any() else 0.0
+    chosen = (float(headings[best]), variant, float(coverage[best]))
+    if refine:
+        # Seeds may fall a little short of the rule: coverage varies fast between degrees.
+        hopeful = affordable & (coverage >= best_coverage - SEED_SLACK)
+        picked = _seeds(lengths, counts, hopeful, headings, objective, REFINE_SEEDS)
+        centres = np.unique(np.concatenate([[headings[best]], headings[picked]]))
+        pool = _Pool(headings, lengths, counts, coverage)
+        for _ in range(REFINE_ROUNDS):
+            # On the 0.1° grid (an edge direction's neighbours too), around each centre.
+            grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
+            near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
+            near = np.setdiff1d(np.unique(near), pool.headings)
+            if len(near) == 0:
+                break
+            near_lengths, near_counts = lengths_of(near)
+            key = _objective_key(near_lengths, near_counts, objective)
+            better = (
+                key < _objective_key(pool.lengths, pool.counts, objective)[pool.index(chosen[0])]
+            )
+            near_coverage = np.full(len(near), np.nan)
+            if better.any():
+                # The shortest headings often trade coverage for length: the constrained
+                # optimum sits on the coverage bound, so all of them are scored at once.
+                near_coverage[better] = coverage_of(near[better])
+                best_coverage = max(best_coverage, float(np.nanmax(near_coverage)))
+            pool = pool.extend(near, near_lengths, near_counts, near_coverage)
+            ok = (pool.counts <= MAX_LINES) & (
+                pool.coverage >= best_coverage - COVERAGE_SLACK - 1e-12
+            )
+            i, variant = select_plan(pool.lengths, pool.counts, objective, eligible=ok)
+            moved = float(pool.headings[i]) != chosen[0]
+            chosen = (float(pool.headings[i]), variant, float(pool.coverage[i]))
+            if not moved:
+                break
+            centres = np.array([chosen[0]])  # re-centre on a refined winner
+    given_up = max(best_coverage - chosen[2], 0.0) * 100.0
+    return HeadingChoice(chosen[0], chosen[1], chosen[2], given_up)
+
+
+@dataclass(frozen=True, slots=True)
+class _Pool:
+    """Every heading scored so far; coverage NaN where it was not needed."""
+
+    headings: FloatArray
+    lengths: VariantLengths
+    counts: IntArray
+    coverage: FloatArray
+
+    def index(self, heading: float) -> int:
+        return int(np.nonzero(self.headings == heading)[0][0])
+
+    def extend(
+        self, headings: FloatArray, lengths: VariantLengths, counts: IntArray, coverage: FloatArray
+    ) -> _Pool:
+        return _Pool(
+            np.concatenate([self.headings, headings]),
+            VariantLengths(
+                np.concatenate([self.lengths.working, lengths.working]),
+                np.concatenate([self.lengths.turns, lengths.turns]),
+                np.concatenate([self.lengths.transit, lengths.transit]),
+            ),
+            np.concatenate([self.counts, counts]),
+            np.concatenate([self.coverage, coverage]),
+        )
+
+
+def _objective_key(lengths: VariantLengths, counts: IntArray, objective: Objective) -> FloatArray:
+    """Return what the objective minimises per heading: line count and length in one number."""
+    best = np.round(lengths.total.min(axis=1) / _TIE_M) * _TIE_M
+    key = np.where(counts <= MAX_LINES, best, np.inf)
+    if objective == "fewest_lines":
+        key = key + counts * 1e12
+    return np.asarray(key)
+
+
+def _seeds(
+    lengths: VariantLengths,
+    counts: IntArray,
+    eligible: npt.NDArray[np.bool_],
+    headings: FloatArray,
+    objective: Objective,
+    k: int,
+) -> IntArray:
+    """Return the best ``k`` eligible headings by the objective, a seed gap apart."""
+    key = np.where(eligible, _objective_key(lengths, counts, objective), np.inf)
+    picked: list[int] = []
+    for i in np.lexsort((headings, key)).tolist():
+        if not np.isfinite(key[i]) or len(picked) == k:
+            break
+        gap = np.abs((headings[picked] - headings[i] + 90.0) % 180.0 - 90.0)
+        if not picked or gap.min() >= _SEED_GAP_DEG:
+            picked.append(i)
+    return np.asarray(picked, dtype=np.int64)

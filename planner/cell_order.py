@@ -84,20 +84,24 @@ def order_cells(
     [(1, 0), (0, 1)]
     """
     m = len(cells.inner_m)
-    # move[c, w, c2, w2]: from the exit of (c, w) to the entry of (c2, w2).
-    ex = cells.exit_xy.reshape(m * 4, 2)
-    en = cells.entry_xy.reshape(m * 4, 2)
-    if move_m is None:
-        move = np.hypot(ex[:, None, 0] - en[None, :, 0], ex[:, None, 1] - en[None, :, 1])
-    else:
-        move = move_m(ex, en)
     first = cells.inner_m.copy()
     if start_xy is not None:
         first += np.hypot(*(cells.entry_xy - np.asarray(start_xy)).transpose(2, 0, 1))
     last = np.zeros((m, 4))
     if finish_xy is not None:
         last += np.hypot(*(cells.exit_xy - np.asarray(finish_xy)).transpose(2, 0, 1))
-    problem = _Problem(move.reshape(m, 4, m, 4), first, last, cells.inner_m)
+    # move[c, w, c2, w2]: from the exit of (c, w) to the entry of (c2, w2). Hundreds of cells
+    # (a jagged boundary) would make it gigabytes: straight moves are then computed as needed.
+    ex = cells.exit_xy.reshape(m * 4, 2)
+    en = cells.entry_xy.reshape(m * 4, 2)
+    if move_m is None and m > LOCAL_SEARCH_MAX_CELLS:
+        problem: _Problem = _StraightProblem(cells, first, last)
+    else:
+        if move_m is None:
+            move = np.hypot(ex[:, None, 0] - en[None, :, 0], ex[:, None, 1] - en[None, :, 1])
+        else:
+            move = move_m(ex, en)
+        problem = _Problem(move.reshape(m, 4, m, 4), first, last, cells.inner_m)
 
     if m <= EXHAUSTIVE_MAX_CELLS:
         orders = np.array(list(itertools.permutations(range(m))), dtype=np.int64)
@@ -119,11 +123,19 @@ class _Problem:
     ) -> None:
         self.move, self.first, self.last, self.inner = move, first, last, inner
 
+    def step(self, a: IntArray, b: IntArray) -> FloatArray:
+        """Return the moves from every variant of cells ``a`` to those of cells ``b``, (K, 4, 4)."""
+        return np.asarray(self.move[a, :, b, :])
+
+    def row(self, c: int, w: int) -> FloatArray:
+        """Return the moves from the exit of ``(c, w)`` to every entry, shape (m, 4)."""
+        return np.asarray(self.move[c, w])
+
     def costs(self, orders: IntArray) -> FloatArray:
         """Route length of the best variants for each order, shape (K,), orders (K, m)."""
         here = self.first[orders[:, 0]]
         for t in range(1, orders.shape[1]):
-            step = self.move[orders[:, t - 1], :, orders[:, t], :]  # (K, 4, 4)
+            step = self.step(orders[:, t - 1], orders[:, t])  # (K, 4, 4)
             here = (here[:, :, None] + step).min(axis=1) + self.inner[orders[:, t]]
         return (here + self.last[orders[:, -1]]).min(axis=1)  # type: ignore[no-any-return]
 
@@ -132,7 +144,7 @@ class _Problem:
         here = self.first[order[0]]
         back = []
         for a, b in itertools.pairwise(order.tolist()):
-            options = here[:, None] + self.move[a, :, b, :]
+            options = here[:, None] + self.step(np.array([a]), np.array([b]))[0]
             back.append(np.argmin(options, axis=0))
             here = options.min(axis=0) + self.inner[b]
         w = int(np.argmin(here + self.last[order[-1]]))
@@ -151,7 +163,7 @@ class _Problem:
         visited = np.zeros(m, dtype=bool)
         visited[current] = True
         for _ in range(m - 1):
-            value = self.move[current, w_here] + self.inner
+            value = self.row(current, w_here) + self.inner
             value[visited] = np.inf
             flat = int(np.argmin(value))
             current, w_here = flat // 4, flat % 4
@@ -188,3 +200,19 @@ class _Problem:
                 break
             order, best = candidates[k], float(costs[k])
         return order
+
+
+class _StraightProblem(_Problem):
+    """:class:`_Problem` with straight moves computed from the coordinates when needed."""
+
+    def __init__(self, cells: CellVariants, first: FloatArray, last: FloatArray) -> None:
+        super().__init__(np.empty((0, 4, 0, 4)), first, last, cells.inner_m)
+        self.exit_xy, self.entry_xy = cells.exit_xy, cells.entry_xy
+
+    def step(self, a: IntArray, b: IntArray) -> FloatArray:
+        gap = self.exit_xy[a][:, :, None, :] - self.entry_xy[b][:, None, :, :]
+        return np.asarray(np.hypot(gap[..., 0], gap[..., 1]))
+
+    def row(self, c: int, w: int) -> FloatArray:
+        gap = self.entry_xy - self.exit_xy[c, w]
+        return np.asarray(np.hypot(gap[..., 0], gap[..., 1]))

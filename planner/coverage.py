@@ -188,10 +188,12 @@ def _covered(
     inside = (k >= 0) & (mid < s1[np.maximum(k, 0)])
     left, right, k = left[inside], right[inside], k[inside]
     width = right - left
-    lo0 = np.interp(left, chains.lo_u, chains.lo_v)
-    lo1 = np.interp(right, chains.lo_u, chains.lo_v)
-    hi0 = np.interp(left, chains.hi_u, chains.hi_v)
-    hi1 = np.interp(right, chains.hi_u, chains.hi_v)
+    # Each piece lies within one edge of each chain: take that edge's line (found at the
+    # piece's middle), since a chain may step straight across the sweep at a vertex (an
+    # edge parallel to the lines) and interpolating at the step would take the far side.
+    mid = (left + right) / 2.0
+    lo0, lo1 = _edge_values(chains.lo_u, chains.lo_v, mid, left, right)
+    hi0, hi1 = _edge_values(chains.hi_u, chains.hi_v, mid, left, right)
     ak, bk = a[k], b[k]
     # Cut each piece where hi crosses b or lo crosses a: between cuts the covered height
     # min(hi, b) − max(lo, a) is linear, and its positive part integrates in closed form.
@@ -209,3 +211,17 @@ def _covered(
         crossing = np.where(high > 0, dt * high * high / (2.0 * (high - low)), 0.0)
     area = np.where(low >= 0, dt * (g0 + g1) / 2.0, np.where(high <= 0, 0.0, crossing))
     return float(area.sum())
+
+
+def _edge_values(
+    chain_u: FloatArray, chain_v: FloatArray, mid: FloatArray, left: FloatArray, right: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Values at ``left`` and ``right`` of the chain edge that holds each ``mid``."""
+    if len(chain_u) < 2:
+        value = np.full(len(mid), float(chain_v[0]) if len(chain_v) else 0.0)
+        return value, value
+    k = np.clip(np.searchsorted(chain_u, mid, side="right") - 1, 0, len(chain_u) - 2)
+    du = chain_u[k + 1] - chain_u[k]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(du > 0.0, (chain_v[k + 1] - chain_v[k]) / du, 0.0)
+    return chain_v[k] + slope * (left - chain_u[k]), chain_v[k] + slope * (right - chain_u[k])

@@ -48,7 +48,7 @@ IntArray = npt.NDArray[np.int64]
 #: A vertex within this distance of the convex hull does not make a field non-convex [m].
 CONVEXITY_TOLERANCE_M = 1e-3
 #: Headings planned in full after the cheap scoring.
-FULL_PLANS = 3
+FULL_PLANS = 6
 #: ... plus this many of the best headings by the other ranking (line count or estimate).
 EXTRA_PLANS = 1
 #: Beyond this many turn-backs (about as many cells) only the best heading is planned in full.
@@ -130,6 +130,7 @@ class GeneralPlan:
     cells_local: list[Polygon]
     coverage_ratio: float
     lines_coverage_ratio: float
+    coverage_given_up_pp: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,6 +151,7 @@ class _Candidate:
     order: list[tuple[int, int]]
     length_m: float
     line_count: int
+    covered_m2: float
 
 
 def plan_general(
@@ -228,6 +230,7 @@ def plan_general(
     after_lines = _first_ring_point(rings[-1]) if rings else finish_xy
 
     best: _Candidate | None = None
+    given_up_pp = 0.0
     if parts:
         exterior = np.asarray(field_local.exterior.coords)[:-1]
         headings = angles.candidate_headings(exterior, fixed_heading_deg)
@@ -242,21 +245,37 @@ def plan_general(
             )
         headings, scores = headings[affordable], scores.subset(affordable)
         estimate = np.round(scores.path_estimate_m(d), 6)
-        by_estimate = np.lexsort((headings, estimate))[:FULL_PLANS]
-        by_lines = np.lexsort((headings, estimate, scores.pieces))[:FULL_PLANS]
+        # Coverage first (R5): headings the estimate puts well below the best are not
+        # planned; the planned ones are then held to the rule exactly.
+        missed = np.round(scores.missed_m2, 6)
+        hopeful = missed <= missed.min() + 2.0 * angles.COVERAGE_SLACK * float(
+            sum(p.area for p in parts)
+        )
+        by_estimate = np.lexsort((headings, np.where(hopeful, estimate, np.inf)))[:FULL_PLANS]
+        by_lines = np.lexsort((headings, estimate, np.where(hopeful, scores.pieces, 2**62)))
+        by_coverage = np.lexsort((headings, estimate, missed))[:1]
         # Both lists for either objective: the estimate misjudges some fields (turns that
         # climb a slanted end), and the fewest-lines heading is often the shortest too.
-        first, second = by_estimate, by_lines
+        first, second = by_estimate, by_lines[:FULL_PLANS]
         if objective == "fewest_lines":
-            first, second = by_lines, by_estimate
-        ranked = list(dict.fromkeys([*first.tolist(), *second[:EXTRA_PLANS].tolist()]))
+            first, second = by_lines[:FULL_PLANS], by_estimate
+        ranked = list(
+            dict.fromkeys([*first.tolist(), *second[:EXTRA_PLANS].tolist(), *by_coverage.tolist()])
+        )
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
-        for a in ranked:
-            candidate = _plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge)
+        candidates = [
+            _plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge) for a in ranked
+        ]
+        best_covered = max(c.covered_m2 for c in candidates)
+        slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
+        for candidate in candidates:
+            if candidate.covered_m2 < best_covered - slack_m2:
+                continue
             if best is None or _better(candidate, best, objective):
                 best = candidate
         if best is not None:
+            given_up_pp = (best_covered - best.covered_m2) / float(field_local.area) * 100.0
             # Round holes a straight line is a poor guess of a move between cells: the
             # winner's few cells are reordered with routed moves (many cells cost too much).
             routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
@@ -319,6 +338,7 @@ def plan_general(
         cells_local=cells_local,
         coverage_ratio=min(covered / field_area, 1.0),
         lines_coverage_ratio=min(lines_covered / field_area, 1.0),
+        coverage_given_up_pp=max(given_up_pp, 0.0),
     )
 
 
@@ -431,7 +451,11 @@ def _plan_heading(
     working = float(lengths.working.sum())
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + _order_length(variants, order, start_xy, finish_xy, None)
-    return _Candidate(heading, cells, scan, variants, working, order, length, len(scan.u))
+    covered = sum(
+        covered_area(c.chains, scan.u[c.lines], scan.v_lo[c.lines], scan.v_hi[c.lines], d)
+        for c in cells
+    )
+    return _Candidate(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
 
 
 def _reach_headland(plan: _Candidate, d: float) -> _Candidate:
@@ -476,6 +500,7 @@ def _reach_headland(plan: _Candidate, d: float) -> _Candidate:
         plan.order,
         plan.length_m,
         plan.line_count,
+        plan.covered_m2,
     )
 
 
@@ -500,6 +525,7 @@ def _reorder(
         order,
         length,
         plan.line_count,
+        plan.covered_m2,
     )
 
 

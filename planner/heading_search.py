@@ -23,6 +23,9 @@ from planner.lines import to_sweep
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
+#: A move into a new cell is estimated at most this many intervals long.
+_NOTCH_HOP = 4.0
+
 
 @dataclass(frozen=True, slots=True)
 class HeadingScores:
@@ -39,12 +42,21 @@ class HeadingScores:
         starts or ends a cell.
     exteriors : int
         Number of polygons: each has two turn-backs (its ends) however it is swept.
+    missed_m2 : ndarray, shape (A,)
+        Estimate of the area the lines' footprints miss at slanted line ends: ``|s| d² / 8``
+        per line end on an edge of slope ``s`` across the sweep (exact for a convex cell's
+        inner strips), at most half the edge's extent along the lines times ``d``.
+    turns_m : ndarray, shape (A,)
+        Estimate of the turns' length: consecutive lines are joined along the boundary at
+        alternate ends, so half of ``d·√(1 + s²)`` per line end (at most the edge's length).
     """
 
     working_m: FloatArray
     pieces: IntArray
     turn_backs: IntArray
     exteriors: int
+    missed_m2: FloatArray
+    turns_m: FloatArray
 
     def subset(self, keep: npt.NDArray[np.bool_]) -> HeadingScores:
         """Return the scores of the headings where ``keep`` is true."""
@@ -53,17 +65,22 @@ class HeadingScores:
             self.pieces[keep],
             self.turn_backs[keep],
             self.exteriors,
+            self.missed_m2[keep],
+            self.turns_m[keep],
         )
 
     def path_estimate_m(self, interval_m: float) -> FloatArray:
-        """Working length, a turn of ``interval_m`` per piece, a line's length per extra cell.
+        """Working length, the turns, a line's length per extra cell.
 
         Every turn-back beyond each polygon's two ends splits or joins the sweep: another
-        cell, and a move to it about as long as a line.
+        cell, and a move to it about as long as a line (at most :data:`_NOTCH_HOP` intervals).
         """
         mean_piece = self.working_m / np.maximum(self.pieces, 1)
         extra = np.maximum(self.turn_backs - 2 * self.exteriors, 0)
-        return self.working_m + self.pieces * interval_m + extra * mean_piece
+        # The move to a new cell is about a line long, but no longer than a short hop round
+        # a notch: a comb's hundreds of teeth are neighbours, not a line apart each.
+        move = np.minimum(mean_piece, _NOTCH_HOP * interval_m)
+        return np.asarray(self.working_m + self.turns_m + extra * move)
 
 
 def score_headings(
@@ -113,6 +130,10 @@ def score_headings(
     sum_v = count * v1 + slope * (count * (first - u1) + d * sum_k)
     entering = du > 0.0
     working = np.where(entering, -sum_v, sum_v).sum(axis=1)
+    dv = np.abs(v2 - v1)
+    missed = np.minimum(count * np.abs(slope) * d * d / 8.0, dv * d / 2.0).sum(axis=1)
+    edge_m = np.hypot(u2 - u1, dv)
+    turns = np.minimum(count * d * np.sqrt(1.0 + slope * slope), edge_m).sum(axis=1) / 2.0
     pieces = np.where(entering, count, 0.0).sum(axis=1).astype(np.int64)
 
     turn_backs = np.zeros(len(headings_deg), dtype=np.int64)
@@ -133,4 +154,6 @@ def score_headings(
         pieces=pieces,
         turn_backs=turn_backs,
         exteriors=len(parts_local),
+        missed_m2=missed,
+        turns_m=turns,
     )

@@ -17,12 +17,13 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.coverage import convex_chains, covered_area
-from planner.errors import InvalidParameterError
 from planner.general import add_fitted_lines
+from planner.heading_coverage import convex_coverage
 from planner.line_ends import convex_lines
 from planner.lines import to_sweep
-from planner.ordering import score_headings
+from planner.ordering import VariantLengths, score_headings
 from planner.projection import LocalFrame, field_frame
+from planner.spiral import order_spiral
 from planner.turns import driving_time_s
 from planner.types import (
     DEFAULT_SPEED_MPS,
@@ -39,6 +40,7 @@ from planner.types import (
 from planner.vehicles import resolve_vehicle
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 #: Waypoints are rounded to 1e-9° (0.1 mm), so every export carries the same numbers.
 LONLAT_DECIMALS = 9
@@ -85,7 +87,9 @@ def plan_coverage(
         :class:`~planner.types.Vehicle`; default ``hand_tractor``. Its body stays inside the
         field and its turns are curves it can drive (R1).
     pattern : {"boustrophedon", "snake", "spiral"}
-        Line order: neighbours back and forth, or skipping lines so that turns need no loops.
+        Line order: neighbours back and forth, skipping lines so that turns need no loops
+        (:func:`planner.ordering.order_snake`), or rounds inward with the core back and forth
+        (:func:`planner.spiral.order_spiral`).
 
     Returns
     -------
@@ -101,7 +105,7 @@ def plan_coverage(
     >>> from shapely import Polygon
     >>> field = Polygon([(115.298, -8.6265), (115.29813989, -8.62649238),
     ...                  (115.29814712, -8.62631751), (115.29800448, -8.62632237)])
-    >>> plan = plan_coverage(field, interval_m=4.0)   # a hand tractor: it pivots between lines
+    >>> plan = plan_coverage(field, interval_m=4.0, angle_deg=1.0)   # a hand tractor pivots
     >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]], plan.vehicle.preset
     (4, ['line_start', 'line_end', 'turn'], 'hand_tractor')
     """
@@ -114,10 +118,6 @@ def plan_coverage(
     machine = resolve_vehicle(vehicle)
     implement = validation.validate_implement_width(implement_width_m, interval)
     order = validation.validate_pattern(pattern)
-    if order == "spiral":
-        raise InvalidParameterError(
-            "pattern", "spiral is not available yet: choose boustrophedon or snake"
-        )
     field_lonlat, area_m2 = validation.validate_field(field_lonlat)
 
     frame = field_frame(field_lonlat)
@@ -128,6 +128,44 @@ def plan_coverage(
     finish_xy = validation.validate_point(
         finish_lonlat, input_name="finish", frame=frame, field_local=field_local
     )
+    # The one pattern dispatch: spiral rounds here; boustrophedon and snake differ only in
+    # the order of the lines (and so the turns), below.
+    if order == "spiral":
+        spiral = order_spiral(
+            field_local,
+            interval_m=interval,
+            start_xy=start_xy,
+            finish_xy=finish_xy,
+            objective=goal,
+            vehicle=machine,
+            implement_width_m=implement,
+        )
+        spiral_route = spiral.route
+        route = _Route(
+            x=spiral_route.x,
+            y=spiral_route.y,
+            roles=spiral_route.roles,
+            lines=spiral_route.lines,
+            segments=spiral_route.segments,
+        )
+        if finish_xy is not None:
+            route.add("finish", None, [finish_xy])
+        return _assemble(
+            route,
+            frame=frame,
+            field_lonlat=field_lonlat,
+            cells_local=spiral.cells_local,
+            interval_m=interval,
+            heading_deg=spiral.heading_deg,
+            line_count=spiral.line_count,
+            coverage_ratio=spiral.coverage_ratio,
+            coverage_given_up_pp=0.0,
+            speed_mps=speed,
+            vehicle=machine,
+            implement_width_m=implement,
+            area_m2=area_m2,
+            started=started,
+        )
     # A convex field without holes or headland passes is one cell at every heading: the
     # closed-form planner takes it (tight budgets). Everything else is decomposed.
     if passes or not general.is_convex(field_local):
@@ -151,9 +189,17 @@ def plan_coverage(
 
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
     headings = angles.candidate_headings(ring_xy, fixed_heading)
-    lengths, counts = score_headings(ring_xy, headings, interval, start_xy, finish_xy)
-    best, variant = angles.select_plan(lengths, counts, goal, interval_m=interval)
-    heading = float(headings[best])
+
+    def lengths_of(headings: FloatArray) -> tuple[VariantLengths, IntArray]:
+        return score_headings(ring_xy, headings, interval, start_xy, finish_xy)
+
+    def coverage_of(headings: FloatArray) -> FloatArray:
+        return convex_coverage(ring_xy, headings, interval)
+
+    choice = angles.search_headings(
+        lengths_of, coverage_of, headings, goal, interval_m=interval, refine=fixed_heading is None
+    )
+    heading, variant = choice.heading_deg, choice.variant
     # One convex cell: its lines end where the vehicle's turns fit inside the field.
     fit = convex_lines(
         field_local,
@@ -185,6 +231,7 @@ def plan_coverage(
         heading_deg=heading,
         line_count=len(u),
         coverage_ratio=covered / float(field_local.area),
+        coverage_given_up_pp=choice.coverage_given_up_pp,
         speed_mps=speed,
         vehicle=machine,
         implement_width_m=implement,
@@ -239,6 +286,7 @@ def _plan_general(
         heading_deg=plan.heading_deg,
         line_count=plan.line_count,
         coverage_ratio=plan.coverage_ratio,
+        coverage_given_up_pp=plan.coverage_given_up_pp,
         speed_mps=speed_mps,
         vehicle=vehicle,
         implement_width_m=implement_width_m,
@@ -288,6 +336,7 @@ def _assemble(
     heading_deg: float,
     line_count: int,
     coverage_ratio: float,
+    coverage_given_up_pp: float,
     speed_mps: float,
     vehicle: Vehicle,
     implement_width_m: float,
@@ -313,7 +362,7 @@ def _assemble(
     seg_length = distance[bounds[:, 1]] - distance[bounds[:, 0]] if len(bounds) else np.zeros(0)
     lengths = {
         kind: float(seg_length[[k == kind for k in kinds]].sum())
-        for kind in ("line", "turn", "transit", "headland")
+        for kind in ("line", "turn", "transit", "headland", "round")
     }
     points = list(zip(lon_list, lat_list, strict=True))
     segments = [
@@ -326,7 +375,7 @@ def _assemble(
         area_m2=round(area_m2, 2),
         line_count=line_count,
         waypoint_count=len(waypoints),
-        working_length_m=round(lengths["line"] + lengths["headland"], 3),
+        working_length_m=round(lengths["line"] + lengths["headland"] + lengths["round"], 3),
         turn_length_m=round(lengths["turn"], 3),
         transit_length_m=round(lengths["transit"], 3),
         path_length_m=round(path_length, 3),
@@ -337,6 +386,7 @@ def _assemble(
         implement_width_m=implement_width_m,
         overlap_m=round(implement_width_m - interval_m, 6),
         vehicle=asdict(vehicle),
+        coverage_given_up_pp=round(coverage_given_up_pp, 4),
     )
     return CoveragePlan(
         field_lonlat=field_lonlat,

@@ -23,6 +23,8 @@ IntArray = npt.NDArray[np.int64]
 
 #: A move may graze the boundary by this much and still count as inside [m]; R1 allows 1 cm.
 GRAZE_M = 1e-3
+#: Corners whose visibility a query tests first (nearest the straight move by the ellipse).
+_FIRST_CORNERS = 32
 #: Sine below which a corner's neighbour counts as on a line through the corner.
 _COLLINEAR = 1e-9
 
@@ -50,6 +52,8 @@ class FieldRouter:
         self._grown = self.field.buffer(GRAZE_M, join_style="mitre")
         shapely.prepare(self._grown)
         self._built = False
+        self._cornered = False
+        self._seen = np.empty((0, 0), dtype=np.int8)
         self.nodes = np.empty((0, 2))
         self._prev = np.empty((0, 2))
         self._next = np.empty((0, 2))
@@ -88,28 +92,101 @@ class FieldRouter:
         b = np.asarray(end_xy, dtype=float)
         if self.inside(a[None], b[None])[0]:
             return np.stack([a, b])
-        self._build()
+        self._corners()
         n = len(self.nodes)
         if n == 0:
             return np.stack([a, b])
-        see_a = self._visible_from(a)
-        see_b = self._visible_from(b)
+        # A path through corner i is at least |a − i| + |i − b| long (the ellipse bound), so
+        # a shortest path no longer than U uses only corners with that bound ≤ U: search the
+        # graph of those corners alone, widening U until the path found is within it.
+        bound = np.hypot(*(self.nodes - a).T) + np.hypot(*(self.nodes - b).T)
+        order = np.argsort(bound, kind="stable")
+        limit = float(bound[order[min(n, _FIRST_CORNERS) - 1]])
+        while True:
+            subset = order[: int(np.searchsorted(bound[order], limit, side="right"))]
+            found = self._subset_path(a, b, subset)
+            if found is not None and found[1] <= limit + 1e-9:
+                return found[0]
+            if len(subset) == n:
+                if found is None:
+                    raise PlannerError(
+                        "field", "no path inside the field joins two points of the plan"
+                    )
+                return found[0]
+            limit = max(2.0 * limit, found[1] if found is not None else 0.0)
+
+    def _subset_path(
+        self, a: FloatArray, b: FloatArray, subset: IntArray
+    ) -> tuple[FloatArray, float] | None:
+        """Shortest path from ``a`` to ``b`` through the corners ``subset`` only."""
+        s = len(subset)
+        self._see_pairs(subset)
+        sub = self._seen[np.ix_(subset, subset)] == 1
+        i, j = np.nonzero(np.triu(sub, k=1))
+        length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
+        see_a = self._visible_from(a, subset)
+        see_b = self._visible_from(b, subset)
+        # Nodes 0 … s-1 the corners, s the start, s+1 the end.
         ia, ib = np.nonzero(see_a)[0], np.nonzero(see_b)[0]
-        if len(ia) == 0 or len(ib) == 0:
-            raise PlannerError("field", "no path inside the field joins two points of the plan")
-        cost = (
-            np.hypot(*(self.nodes[ia] - a).T)[:, None]
-            + self._dist[np.ix_(ia, ib)]
-            + np.hypot(*(self.nodes[ib] - b).T)[None, :]
+        rows = np.concatenate([i, np.full(len(ia), s), ib])
+        cols = np.concatenate([j, ia, np.full(len(ib), s + 1)])
+        weights = np.concatenate(
+            [
+                length,
+                np.hypot(*(self.nodes[subset[ia]] - a).T),
+                np.hypot(*(self.nodes[subset[ib]] - b).T),
+            ]
         )
-        flat = int(np.argmin(cost))
-        if not np.isfinite(cost.flat[flat]):
-            raise PlannerError("field", "no path inside the field joins two points of the plan")
-        i, j = int(ia[flat // len(ib)]), int(ib[flat % len(ib)])
-        chain = [j]
-        while chain[-1] != i:
-            chain.append(int(self._pred[i, chain[-1]]))
-        return np.vstack([a, self.nodes[chain[::-1]], b])
+        graph = csr_matrix((weights, (rows, cols)), shape=(s + 2, s + 2))
+        dist, pred = shortest_path(
+            graph, method="D", directed=False, indices=s, return_predecessors=True
+        )
+        if not np.isfinite(dist[s + 1]):
+            return None
+        chain = [int(pred[s + 1])]
+        while chain[-1] != s:
+            chain.append(int(pred[chain[-1]]))
+        corners = subset[np.asarray(chain[:-1][::-1], dtype=np.int64)]
+        return np.vstack([a, self.nodes[corners], b]), float(dist[s + 1])
+
+    def _see_pairs(self, subset: IntArray) -> None:
+        """Fill in which pairs of ``subset`` see each other (tangent and inside), once each."""
+        sub = np.sort(subset)
+        known = self._seen[np.ix_(sub, sub)]
+        i, j = np.nonzero(np.triu(known < 0, k=1))
+        if len(i) == 0:
+            return
+        i, j = sub[i], sub[j]
+        a, b = self.nodes[i], self.nodes[j]
+        ok = _tangent(b, a, self._prev[i], self._next[i]) & _tangent(
+            a, b, self._prev[j], self._next[j]
+        )
+        result = np.zeros(len(i), dtype=np.int8)
+        if ok.any():
+            result[ok] = self.inside(a[ok], b[ok]).astype(np.int8)
+        self._seen[i, j] = result
+        self._seen[j, i] = result
+
+    def _corners(self) -> None:
+        if self._cornered:
+            return
+        self._cornered = True
+        nodes, prev, nxt = [], [], []
+        for ring in (self.field.exterior, *self.field.interiors):
+            xy = np.asarray(ring.coords)[:-1]
+            before, after = np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0)
+            cross = _cross(xy - before, after - xy)
+            # Exterior counter-clockwise, holes clockwise: free space turns right at its
+            # reflex corners.
+            reflex = cross < 0.0
+            nodes.append(xy[reflex])
+            prev.append(before[reflex])
+            nxt.append(after[reflex])
+        self.nodes = np.concatenate(nodes)
+        self._prev = np.concatenate(prev)
+        self._next = np.concatenate(nxt)
+        n = len(self.nodes)
+        self._seen = np.full((n, n), -1, dtype=np.int8)  # -1 unknown, 0 blocked, 1 seen
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
         """Return the shortest-path lengths inside the field from every start to every end.
@@ -156,41 +233,23 @@ class FieldRouter:
         lengths: FloatArray = np.where(seen, straight, around)
         return lengths
 
-    def _visible_from(self, p: FloatArray) -> npt.NDArray[np.bool_]:
+    def _visible_from(self, p: FloatArray, which: IntArray) -> npt.NDArray[np.bool_]:
         # No tangency filter here: a query point on the boundary, a hair off an edge, would
         # fail it against that edge's own corner.
-        return self.inside(np.repeat(p[None], len(self.nodes), axis=0), self.nodes)
+        return self.inside(np.repeat(p[None], len(which), axis=0), self.nodes[which])
 
     def _build(self) -> None:
+        """All-pairs distances between the corners (for :meth:`distances`)."""
         if self._built:
             return
         self._built = True
-        nodes, prev, nxt = [], [], []
-        for ring in (self.field.exterior, *self.field.interiors):
-            xy = np.asarray(ring.coords)[:-1]
-            before, after = np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0)
-            cross = _cross(xy - before, after - xy)
-            # Exterior counter-clockwise, holes clockwise: free space turns right at its
-            # reflex corners.
-            reflex = cross < 0.0
-            nodes.append(xy[reflex])
-            prev.append(before[reflex])
-            nxt.append(after[reflex])
-        self.nodes = np.concatenate(nodes)
-        self._prev = np.concatenate(prev)
-        self._next = np.concatenate(nxt)
+        self._corners()
         n = len(self.nodes)
         if n == 0:
             return
-        i, j = np.triu_indices(n, k=1)
-        a, b = self.nodes[i], self.nodes[j]
-        ok = _tangent(b, a, self._prev[i], self._next[i]) & _tangent(
-            a, b, self._prev[j], self._next[j]
-        )
-        i, j = i[ok], j[ok]
-        if len(i):
-            seen = self.inside(self.nodes[i], self.nodes[j])
-            i, j = i[seen], j[seen]
+        everything = np.arange(n)
+        self._see_pairs(everything)
+        i, j = np.nonzero(np.triu(self._seen == 1, k=1))
         length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
         graph = csr_matrix((length, (i, j)), shape=(n, n))
         dist, pred = shortest_path(graph, method="D", directed=False, return_predecessors=True)

@@ -126,7 +126,11 @@ class PathSegment:
 
 @dataclass(frozen=True, slots=True)
 class PlanStats:
-    """The figures of a plan (product.md §3, "Output")."""
+    """The figures of a plan (product.md §3, "Output").
+
+    ``coverage_given_up_pp`` is how far the chosen heading's coverage is below the best
+    candidate heading's, in percentage points (R5 allows at most 0.2); 0 when none was given up.
+    """
 
     area_m2: float
     line_count: int
@@ -139,6 +143,7 @@ class PlanStats:
     angle_deg: float
     estimated_time_s: float
     planning_ms: float
+    coverage_given_up_pp: float = 0.0
     #: Working width of the implement [m]: what the coverage is measured with (R4).
     implement_width_m: float | None = None
     #: Implement width minus interval [m]: > 0 the passes overlap, < 0 strips are left.

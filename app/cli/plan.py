@@ -26,7 +26,7 @@ class OutputFormat(StrEnum):
 
 
 class PatternChoice(StrEnum):
-    """Line order."""
+    """How the path covers the field (product.md §3)."""
 
     boustrophedon = "boustrophedon"
     snake = "snake"
@@ -128,7 +128,11 @@ def plan_command(
         ),
     ] = None,
     pattern: Annotated[
-        PatternChoice, typer.Option("--pattern", help="Line order.")
+        PatternChoice,
+        typer.Option(
+            "--pattern",
+            help="Lines back and forth, skipping lines (snake), or rounds inward (spiral).",
+        ),
     ] = PatternChoice.boustrophedon,
     speed: Annotated[
         float | None,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -48,6 +49,28 @@ def _needs_first_account() -> bool:
         return False
 
 
+def check_tls_files(certfile: Path | None, keyfile: Path | None) -> None:
+    """Refuse a half-given or unreadable certificate pair before the server starts.
+
+    Raises
+    ------
+    typer.Exit
+        Through :func:`app.cli.common.fail` (``error: …``, status 2).
+    """
+    if (certfile is None) != (keyfile is None):
+        fail("--certfile and --keyfile: give both to serve HTTPS, or neither")
+    for option, path in (("--certfile", certfile), ("--keyfile", keyfile)):
+        if path is not None and not path.is_file():
+            fail(f"{option}: {path} is not a file")
+    if certfile is not None and keyfile is not None:
+        import ssl
+
+        try:
+            ssl.create_default_context(ssl.Purpose.CLIENT_AUTH).load_cert_chain(certfile, keyfile)
+        except (ssl.SSLError, OSError) as exc:
+            fail(f"--certfile/--keyfile: cannot use them for HTTPS ({exc})")
+
+
 def register(cli: typer.Typer) -> None:
     """Add ``serve`` and the ``db`` group to ``cli``."""
     db = typer.Typer(help="Manage the database.", no_args_is_help=True)
@@ -68,18 +91,35 @@ def register(cli: typer.Typer) -> None:
         access_log: Annotated[
             bool, typer.Option("--access-log/--no-access-log", help="Log every request.")
         ] = True,
+        certfile: Annotated[
+            Path | None,
+            typer.Option(help="TLS certificate (PEM) to serve HTTPS: phones' GPS needs it."),
+        ] = None,
+        keyfile: Annotated[
+            Path | None, typer.Option(help="Private key (PEM) of --certfile.")
+        ] = None,
     ) -> None:
         """Migrate the database, then serve the map page and the API (uvicorn)."""
         import uvicorn
 
+        from app.budget import warm_up
+
+        check_tls_files(certfile, keyfile)
         shown = upgrade()
-        typer.echo(f"database {shown} is up to date; serving on http://{host}:{port}", err=True)
+        scheme = "https" if certfile else "http"
+        typer.echo(f"database {shown} is up to date; serving on {scheme}://{host}:{port}", err=True)
+        if host in ("0.0.0.0", "::"):
+            typer.echo(
+                f"open {scheme}://<this computer's address>:{port} on a phone on the same network",
+                err=True,
+            )
         if _needs_first_account():
             typer.echo(
-                f"no account yet: open http://{host}:{port}/ to create the first one "
+                f"no account yet: open {scheme}://{host}:{port}/ to create the first one "
                 "(or run `tillpath users create NAME --password-stdin`)",
                 err=True,
             )
+        warm_up()
         uvicorn.run(
             "app.main:create_app",
             factory=True,
@@ -88,4 +128,6 @@ def register(cli: typer.Typer) -> None:
             workers=workers,
             access_log=access_log,
             proxy_headers=True,
+            ssl_certfile=str(certfile) if certfile else None,
+            ssl_keyfile=str(keyfile) if keyfile else None,
         )

@@ -7,17 +7,20 @@ fetches plans from the API as JSON and draws them. No planning happens in the br
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, FastAPI, Request
-from fastapi.responses import HTMLResponse
+from fastapi.responses import HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 from jinja2 import pass_context
 from starlette.routing import NoMatchFound
 
+from app import i18n
 from app.settings import Settings, get_settings
 
 logger = logging.getLogger(__name__)
@@ -43,6 +46,7 @@ VENDOR_DIRS: dict[str, tuple[str, Path]] = {
 PLANS_API_FALLBACK = "/api/plans"
 
 templates = Jinja2Templates(directory=TEMPLATES_DIR)
+i18n.install_jinja(templates.env)
 router = APIRouter(include_in_schema=False)
 
 
@@ -107,14 +111,124 @@ def map_page(
 ) -> HTMLResponse:
     """Render the map page: draw a field, plan a path, save and download it."""
     plans_url = _plans_api_url(request)
+    lang = i18n.negotiate_language(
+        request.headers.get("accept-language"), request.cookies.get(i18n.LANGUAGE_COOKIE)
+    )
     context = {
+        "lang": lang,
+        "languages": i18n.LANGUAGES,
+        "catalog_url": relative_url(request, "catalog", lang=lang),
+        "service_worker_url": relative_url(request, "service_worker"),
         "plans_url": plans_url,
         # The API root: simulations and runs live at ``{api_url}/simulations/{id}``, ``/runs/…``.
         "api_url": plans_url.rstrip("/").removesuffix("/plans"),
         "satellite_tile_url": settings.satellite_tile_url,
         "street_tile_url": settings.street_tile_url,
     }
-    return templates.TemplateResponse(request, "map.html", context)
+    with i18n.use_language(lang):
+        response = templates.TemplateResponse(request, "map.html", context)
+    # The page differs by language: caches must keep one copy per cookie and header.
+    response.headers["Vary"] = "Accept-Language, Cookie"
+    return response
+
+
+@router.get("/i18n/{lang}.json", name="catalog")
+def catalog(lang: str) -> JSONResponse:
+    """Return the compiled catalog of ``lang`` for the page's ``t()`` (static/js/i18n.js).
+
+    ``{"lang": "id", "messages": {msgid: translation}}``; English (the source language) and
+    unknown languages answer an empty ``messages``, so the English text shows.
+    """
+    known = lang if lang in i18n.LANGUAGES else i18n.DEFAULT_LANGUAGE
+    return JSONResponse({"lang": known, "messages": i18n.catalog_messages(known)})
+
+
+@router.get("/manifest.webmanifest", name="web_manifest")
+def web_manifest(request: Request) -> JSONResponse:
+    """Return the web app manifest: a phone can install the page and open it full screen."""
+    lang = i18n.negotiate_language(
+        request.headers.get("accept-language"), request.cookies.get(i18n.LANGUAGE_COOKIE)
+    )
+    icon = relative_url(request, "static", path="favicon.svg")
+    manifest = {
+        "name": "tillpath",
+        "short_name": "tillpath",
+        "description": i18n.gettext("Back-and-forth paths for hand tractors", lang),
+        "lang": lang,
+        "start_url": relative_url(request, "map_page"),
+        "scope": relative_url(request, "map_page"),
+        "display": "standalone",
+        "background_color": "#f6f8f6",
+        "theme_color": "#1f5130",
+        "icons": [{"src": icon, "sizes": "any", "type": "image/svg+xml", "purpose": "any"}],
+    }
+    return JSONResponse(manifest, media_type="application/manifest+json")
+
+
+#: The libraries the page loads from node_modules (the service worker caches them).
+VENDOR_SHELL = (
+    "vendor/leaflet/leaflet.css",
+    "vendor/leaflet/leaflet.js",
+    "vendor/leaflet/images/layers.png",
+    "vendor/leaflet/images/layers-2x.png",
+    "vendor/leaflet/images/marker-icon.png",
+    "vendor/leaflet-geoman/leaflet-geoman.css",
+    "vendor/leaflet-geoman/leaflet-geoman.min.js",
+)
+
+
+def shell_paths() -> list[str]:
+    """Return what the page needs offline, as paths below the site root.
+
+    Every file under ``static/`` (so a new script module is cached without anyone listing it),
+    the libraries of :data:`VENDOR_SHELL`, the manifest and one catalog per language.
+    """
+    static = sorted(
+        "static/" + path.relative_to(STATIC_DIR).as_posix()
+        for path in STATIC_DIR.rglob("*")
+        if path.is_file() and path.name != "sw.js"
+    )
+    catalogs = [f"i18n/{lang}.json" for lang in i18n.LANGUAGES]
+    return ["", "manifest.webmanifest", *catalogs, *static, *VENDOR_SHELL]
+
+
+def _shell_file(path: str) -> Path | None:
+    """Return the file behind a shell path, or None for the generated ones (page, catalogs)."""
+    if path.startswith("static/"):
+        return ROOT / path
+    if path.startswith("vendor/"):
+        name, rest = path.removeprefix("vendor/").split("/", 1)
+        return VENDOR_DIRS[f"/vendor/{name}"][1] / rest
+    return None
+
+
+def shell_version(paths: list[str]) -> str:
+    """Return a short hash of the shell's files and catalogs (name, size, time): the cache's name.
+
+    A deploy that changes any of them makes the service worker fetch the shell anew.
+    """
+    files = [_shell_file(path) for path in paths]
+    files += [i18n.po_path(lang) for lang in i18n.LANGUAGES]
+    files += sorted(TEMPLATES_DIR.rglob("*.html"))
+    digest = hashlib.sha256()
+    for file in files:
+        if file is not None and file.is_file():
+            stat = file.stat()
+            digest.update(f"{file.name}:{stat.st_size}:{stat.st_mtime_ns};".encode())
+    return digest.hexdigest()[:12]
+
+
+@router.get("/sw.js", name="service_worker")
+def service_worker() -> Response:
+    """Serve the service worker from the site's root so that its scope covers the page (``/``).
+
+    The list of files to cache and the cache's version are filled in here, from the files.
+    """
+    paths = shell_paths()
+    script = (STATIC_DIR / "js" / "sw.js").read_text(encoding="utf-8")
+    script = script.replace('/*SHELL*/ [""]', json.dumps(paths))
+    script = script.replace('/*VERSION*/ "dev"', json.dumps(shell_version(paths)))
+    return Response(script, media_type="text/javascript", headers={"Cache-Control": "no-cache"})
 
 
 def mount_pages(app: FastAPI) -> None:

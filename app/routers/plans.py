@@ -72,9 +72,12 @@ def list_plans(
     field_id: Annotated[
         int | None, Query(ge=1, le=services.MAX_ID, description="Only the plans of this field.")
     ] = None,
+    q: Annotated[
+        str | None, Query(max_length=200, description="Only plans whose name contains this.")
+    ] = None,
 ) -> PlanList:
     """List the organisation's plans, newest first, with their figures but no geometry."""
-    return services.list_plans(session, access, limit=limit, offset=offset, field_id=field_id)
+    return services.list_plans(session, access, limit=limit, offset=offset, field_id=field_id, q=q)
 
 
 @router.get("/{plan_id}", response_model=PlanRead, responses={**_NOT_FOUND, **_BAD_INPUT})

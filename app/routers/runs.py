@@ -13,7 +13,7 @@ from app.errors import UploadTooLargeError
 from app.models import PLAN_NAME_MAX_LENGTH
 from app.schemas import ErrorRead, FixesAdded, FixIn, RunList, RunRead
 from app.settings import Settings, get_settings
-from app.tracks import parse_track
+from app.tracks import TrackFormatError, parse_track
 
 router = APIRouter(tags=["runs"])
 
@@ -70,6 +70,8 @@ def create_run(
     token may open a live run; uploading a file needs the planner role.
     """
     plan = services.read_plan(session, plan_id, access)
+    if name is not None and "\x00" in name:  # PostgreSQL text cannot hold NUL
+        raise TrackFormatError("name", "must not contain NUL characters")
     if file is not None and access.via == "device":
         raise forbidden(
             "a device token may open a live run and post fixes; uploading a "

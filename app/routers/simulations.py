@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Response, status
+from fastapi import APIRouter, Query, Response, status
 
 from app import services
 from app.auth import Planner, Viewer
 from app.db import SessionDep
+from app.display import TrackDetail, display_tracks
 from app.models import Simulation
-from app.schemas import ErrorRead, SimulationCreate, SimulationRead
+from app.schemas import (
+    ErrorRead,
+    SimulationCreate,
+    SimulationList,
+    SimulationRead,
+)
 
 router = APIRouter(tags=["simulations"])
 
@@ -20,6 +26,18 @@ _BAD_INPUT: dict[int | str, dict[str, Any]] = {
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorRead, "description": "No such plan or simulation"}
 }
+#: ``?tracks=display``: only the true track, thinned for drawing (app/display.py).
+TracksQuery = Annotated[
+    TrackDetail,
+    Query(description="`full` (every second, three tracks) or `display` (true track, thinned)."),
+]
+
+
+def _answer(simulation: Simulation, tracks: TrackDetail) -> Simulation | SimulationRead:
+    if tracks == "full":
+        return simulation
+    answer = SimulationRead.model_validate(simulation)
+    return answer.model_copy(update={"tracks": display_tracks(simulation.tracks)})
 
 
 @router.post(
@@ -34,7 +52,8 @@ def create_simulation(
     access: Planner,
     response: Response,
     body: SimulationCreate | None = None,
-) -> Simulation:
+    tracks: TracksQuery = "full",
+) -> Simulation | SimulationRead:
     """Simulate the tractor driving a stored plan; store and return the run.
 
     The body is optional (defaults: seed 0, `m8n`, `waypoint`).
@@ -44,7 +63,17 @@ def create_simulation(
     session.add(simulation)
     session.commit()
     response.headers["Location"] = f"/api/simulations/{simulation.id}"
-    return simulation
+    return _answer(simulation, tracks)
+
+
+@router.get(
+    "/plans/{plan_id}/simulations",
+    response_model=SimulationList,
+    responses={**_BAD_INPUT, **_NOT_FOUND},
+)
+def list_simulations(plan_id: int, session: SessionDep, access: Viewer) -> SimulationList:
+    """List a stored plan's simulations, newest first, with their metrics but no tracks."""
+    return services.list_simulations(session, services.read_plan(session, plan_id, access), access)
 
 
 @router.get(
@@ -52,9 +81,11 @@ def create_simulation(
     response_model=SimulationRead,
     responses={**_BAD_INPUT, **_NOT_FOUND},
 )
-def read_simulation(simulation_id: int, session: SessionDep, access: Viewer) -> Simulation:
+def read_simulation(
+    simulation_id: int, session: SessionDep, access: Viewer, tracks: TracksQuery = "full"
+) -> Simulation | SimulationRead:
     """Return a stored simulation with its metrics and tracks."""
-    return services.read_simulation(session, simulation_id, access)
+    return _answer(services.read_simulation(session, simulation_id, access), tracks)
 
 
 @router.get(

@@ -20,7 +20,7 @@ from planner.fields import parse_field_geojson
 from planner.types import CoveragePlan, PathSegment, PlanStats, Vehicle, Waypoint
 
 _ROLES = {"start", "line_start", "line_end", "turn", "headland", "finish"}
-_SEGMENT_KINDS = ("transit", "line", "turn", "headland")
+_SEGMENT_KINDS = ("transit", "line", "turn", "headland", "round")
 
 
 def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str, Any]:
@@ -38,7 +38,7 @@ def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str,
     for segment in plan.segments:
         line = {"type": "LineString", "coordinates": [list(p) for p in segment.lonlat]}
         properties: dict[str, Any] = {"kind": segment.kind}
-        if segment.kind in ("line", "headland"):
+        if segment.kind in ("line", "headland", "round"):
             properties["index"] = segment.index
         features.append(_feature(line, properties))
     if len(plan.waypoints) >= 2:

@@ -2,6 +2,9 @@
 // in, the organisation switch, sign-out, and the settings with API and device tokens.
 // The session lives in an HttpOnly cookie; every write sends the session's CSRF token.
 
+import { friendlyError } from "./format.js";
+import { t } from "./i18n.js";
+
 const $ = (id) => document.getElementById(id);
 
 let csrfToken = null;
@@ -12,7 +15,11 @@ export function csrfHeaders() {
 }
 
 async function call(url, { method = "GET", body } = {}) {
-  const headers = { Accept: "application/json", ...(method === "GET" ? {} : csrfHeaders()) };
+  const headers = {
+    Accept: "application/json",
+    "Accept-Language": document.documentElement.lang || "en",
+    ...(method === "GET" ? {} : csrfHeaders()),
+  };
   if (body !== undefined) headers["Content-Type"] = "application/json";
   const response = await fetch(url, {
     method,
@@ -32,18 +39,18 @@ async function call(url, { method = "GET", body } = {}) {
 }
 
 function formatTime(text) {
-  return text ? new Date(text).toLocaleString() : "never";
+  return text ? new Date(text).toLocaleString(document.documentElement.lang || undefined) : t("never");
 }
 
 /** Show the sign-in screen (or the first-account one) until the person is signed in. */
 function askToSignIn(apiUrl, firstAccount) {
   const screen = $("auth-screen");
   document.body.append(screen); // above everything, whatever the panel's layout
-  $("auth-title").textContent = firstAccount ? "Create the first account" : "Sign in";
+  $("auth-title").textContent = firstAccount ? t("Create the first account") : t("Sign in");
   $("auth-hint").textContent = firstAccount
-    ? "This server has no account yet. Choose a username and a password (at least 8 characters): you will own its organisation."
-    : "Sign in to see your organisation's fields and plans.";
-  $("auth-submit").textContent = firstAccount ? "Create account" : "Sign in";
+    ? t("This server has no account yet. Choose a username and a password (at least 8 characters): you will own its organisation.")
+    : t("Sign in to see your organisation's fields and plans.");
+  $("auth-submit").textContent = firstAccount ? t("Create account") : t("Sign in");
   $("auth-organisation-row").hidden = !firstAccount;
   $("auth-password").autocomplete = firstAccount ? "new-password" : "current-password";
   screen.hidden = false;
@@ -59,8 +66,8 @@ function askToSignIn(apiUrl, firstAccount) {
         body,
       });
       if (!answer.ok) {
-        const detail = typeof answer.data?.detail === "string" ? answer.data.detail : `HTTP ${answer.status}`;
-        $("auth-error").textContent = detail;
+        // The server words it in the page's language; the input gets its label (format.js).
+        $("auth-error").textContent = friendlyError(answer.status, answer.data?.detail).message;
         return;
       }
       screen.hidden = true;
@@ -90,16 +97,21 @@ function showAccount(apiUrl, me) {
 function tokenItem(apiUrl, token, refresh) {
   const item = document.createElement("li");
   const label = document.createElement("span");
-  const kind = token.kind === "device" ? "device" : "personal";
-  label.textContent = `${token.name} (${kind}, ${token.prefix}…) · last used ${formatTime(token.last_used_at)}`;
+  const kind = token.kind === "device" ? t("device") : t("personal");
+  label.textContent = t("{name} ({kind}, {prefix}…) · last used {time}", {
+    name: token.name,
+    kind,
+    prefix: token.prefix,
+    time: formatTime(token.last_used_at),
+  });
   if (token.revoked_at) label.className = "revoked";
   item.append(label);
   if (!token.revoked_at) {
     const revoke = document.createElement("button");
     revoke.type = "button";
     revoke.className = "quiet small";
-    revoke.textContent = "Revoke";
-    revoke.setAttribute("aria-label", `Revoke ${token.name}`);
+    revoke.textContent = t("Revoke");
+    revoke.setAttribute("aria-label", t("Revoke {name}", { name: token.name }));
     revoke.addEventListener("click", async () => {
       await call(`${apiUrl}/tokens/${encodeURIComponent(token.id)}`, { method: "DELETE" });
       refresh();

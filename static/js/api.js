@@ -1,7 +1,10 @@
 // The plans API (product.md §5). Every URL derives from the one the server put in the page, so
-// the page keeps working behind a proxy or under a path prefix.
+// the page keeps working behind a proxy or under a path prefix. Requests ask for errors in the
+// page's language (Accept-Language), so the API's words match the page's.
 
 import { csrfHeaders } from "./account.js";
+
+const LANGUAGE = document.documentElement.lang || "en";
 
 /** A refused or failed request: `status` is 0 when the server could not be reached. */
 export class ApiError extends Error {
@@ -21,7 +24,7 @@ async function send(url, options) {
     response = await fetch(url, {
       ...options,
       credentials: "same-origin",
-      headers: { Accept: "application/json", ...write, ...options.headers },
+      headers: { Accept: "application/json", "Accept-Language": LANGUAGE, ...write, ...options.headers },
     });
   } catch {
     throw new ApiError(0, null);
@@ -67,9 +70,11 @@ export class PlansApi {
     return requestJson(this.plansUrl, { method: "POST", body: request });
   }
 
-  /** Newest first: `{items, total}`. */
-  list({ limit = 50, offset = 0 } = {}) {
-    return requestJson(`${this.plansUrl}?limit=${limit}&offset=${offset}`);
+  /** Newest first: `{items, total}`; `q` keeps the plans whose name contains it. */
+  list({ limit = 50, offset = 0, q = "" } = {}) {
+    const query = new URLSearchParams({ limit: String(limit), offset: String(offset) });
+    if (q) query.set("q", q);
+    return requestJson(`${this.plansUrl}?${query}`);
   }
 
   read(id) {
@@ -96,12 +101,24 @@ export class ChecksApi {
     this.apiUrl = apiUrl.replace(/\/+$/, "");
   }
 
-  /** Simulate a stored plan: `{seed, gps, guidance}`; the answer has metrics and tracks. */
+  /**
+   * Simulate a stored plan: `{seed, gps, guidance}`; the answer has metrics and the true track,
+   * thinned for drawing (`tracks=display`; the GPX export has every second of all three).
+   */
   simulate(planId, body) {
-    return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/simulations`, {
+    return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/simulations?tracks=display`, {
       method: "POST",
       body,
     });
+  }
+
+  /** A plan's stored simulations, newest first: `{items, total}` (metrics, no tracks). */
+  listSimulations(planId) {
+    return requestJson(`${this.apiUrl}/plans/${encodeURIComponent(planId)}/simulations`);
+  }
+
+  readSimulation(id) {
+    return requestJson(`${this.apiUrl}/simulations/${encodeURIComponent(id)}?tracks=display`);
   }
 
   simulationGpxUrl(id) {

@@ -5,7 +5,8 @@
 
 /* global L */
 
-import { formatDate, formatDuration, formatPercent } from "./format.js";
+import { formatDate, formatDuration, formatMetres, formatPercent } from "./format.js";
+import { t, tn } from "./i18n.js";
 
 /** How often a live run is fetched again [ms]. */
 export const LIVE_POLL_MS = 3000;
@@ -16,9 +17,22 @@ const OFF_LINE_STYLE = { color: "#ff2d2d", weight: 7, opacity: 0.85, lineCap: "r
 
 const $ = (id) => document.getElementById(id);
 
-/** An error in metres with centimetres, or a dash when there is none. */
-function formatMetres(value) {
-  return Number.isFinite(value) ? `${value.toFixed(2)} m` : "–";
+/** "live", or the file format a run was uploaded in (GPX, CSV, NMEA). */
+function sourceLabel(source) {
+  return source === "live" ? t("live") : String(source).toUpperCase();
+}
+
+const GPS_LABELS = { m8n: "u-blox M8N", rtk: "RTK" };
+const GUIDANCE_LABELS = { waypoint: t("waypoints"), line: t("line following") };
+
+/** "(u-blox M8N, waypoints, seed 42)": how a simulation was run. */
+function simulationLabel(config) {
+  const { gps, guidance, seed } = config ?? {};
+  return t("({gps}, {guidance}, seed {seed})", {
+    gps: GPS_LABELS[gps] ?? String(gps),
+    guidance: GUIDANCE_LABELS[guidance] ?? String(guidance),
+    seed: String(seed),
+  });
 }
 
 function latLngs(coordinates) {
@@ -32,7 +46,7 @@ function fillFigures(container, metrics, extra = {}) {
     wp_max: formatMetres(metrics?.waypoint_error_max_m),
     wp_mean: formatMetres(metrics?.waypoint_error_mean_m),
     xte_rms: formatMetres(metrics?.cross_track_rms_m),
-    completed: metrics ? (metrics.completed ? "yes" : "no") : "–",
+    completed: metrics ? (metrics.completed ? t("yes") : t("no")) : "–",
     ...extra,
   };
   for (const [key, text] of Object.entries(figures)) {
@@ -44,9 +58,14 @@ function fillFigures(container, metrics, extra = {}) {
 function stretchesText(metrics) {
   if (!metrics) return "–";
   const n = metrics.stretches.length;
-  if (n === 0) return `never more than ${formatMetres(metrics.threshold_m)} off a line`;
+  if (n === 0) return t("never more than {threshold} off a line", { threshold: formatMetres(metrics.threshold_m) });
   const seconds = metrics.stretches.reduce((sum, s) => sum + s.duration_s, 0);
-  return `${n} stretch${n === 1 ? "" : "es"} over ${formatMetres(metrics.threshold_m)}, ${formatDuration(seconds)} in all`;
+  return tn(
+    "{count} stretch over {threshold}, {time} in all",
+    "{count} stretches over {threshold}, {time} in all",
+    n,
+    { count: n, threshold: formatMetres(metrics.threshold_m), time: formatDuration(seconds) },
+  );
 }
 
 /**
@@ -60,7 +79,7 @@ function stretchesText(metrics) {
  * @param {() => void} options.clearError
  * @returns {{planChanged: (planId: number | null) => void}}
  */
-export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
+export function setUpChecks({ map, api, setStatus, showFailure, clearError, onResult = setStatus }) {
   const ui = {
     card: $("check"),
     gps: $("sim-gps"),
@@ -87,8 +106,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     ui.simulate.disabled = !enabled;
     ui.upload.disabled = !enabled;
     ui.hint.textContent = enabled
-      ? "Upload the tractor's log: a GPX track, a CSV file (time,lat,lon) or a u-blox NMEA log."
-      : "Save the plan first, then simulate it or upload the tractor's track.";
+      ? t("Upload the tractor's log: a GPX track, a CSV file (time,lat,lon) or a u-blox NMEA log.")
+      : t("Save the plan first, then simulate it or upload the tractor's track.");
   }
 
   function stopPolling() {
@@ -119,7 +138,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
       className: "simulated-track",
     }).addTo(map);
     const { gps, guidance, seed } = simulation.config;
-    ui.simulationTitle.textContent = `(${gps}, ${guidance}, seed ${seed})`;
+    ui.simulationTitle.textContent = simulationLabel(simulation.config);
     fillFigures(ui.simulation, simulation.metrics);
     ui.simulationGpx.href = api.simulationGpxUrl(simulation.id);
     ui.simulationKml.href = api.simulationKmlUrl(simulation.id);
@@ -144,21 +163,27 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
         pmIgnore: true,
         className: "off-line-stretch",
       })
-        .bindTooltip(`Up to ${formatMetres(p.max_error_m)} off line ${p.line + 1} for ${formatDuration(p.duration_s)}`)
+        .bindTooltip(
+          t("Up to {error} off line {line} for {time}", {
+            error: formatMetres(p.max_error_m),
+            line: String(p.line),
+            time: formatDuration(p.duration_s),
+          }),
+        )
         .addTo(group);
     }
     if (run.last_fix) {
       L.marker([run.last_fix.lat, run.last_fix.lon], {
         pmIgnore: true,
         interactive: false,
-        title: "Tractor",
-        alt: "Tractor's last position",
+        title: t("Tractor"),
+        alt: t("Tractor's last position"),
         icon: L.divIcon({ className: "tractor-marker", html: "<span></span>", iconSize: [22, 22], iconAnchor: [11, 11] }),
       }).addTo(group);
     }
     state.runLayer = group.addTo(map);
-    const title = run.name || `Run ${run.id}`;
-    ui.runTitle.textContent = `(${title}, ${run.source === "live" ? "live" : run.source.toUpperCase()})`;
+    const title = run.name || t("Run {id}", { id: String(run.id) });
+    ui.runTitle.textContent = `(${title}, ${sourceLabel(run.source)})`;
     fillFigures(ui.run, run.metrics, {
       fixes: String(run.fix_count),
       stretches: stretchesText(run.metrics),
@@ -186,26 +211,45 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     }
   }
 
-  function runItem(run) {
+  function listItem({ id, title, meta, label, onOpen }) {
     const item = document.createElement("li");
-    item.dataset.id = String(run.id);
+    item.dataset.id = String(id);
     const open = document.createElement("button");
     open.type = "button";
     open.className = "open-plan";
-    const title = run.name || `Run ${run.id}`;
-    open.setAttribute("aria-label", `Open run ${title}`);
+    open.setAttribute("aria-label", label);
     const name = document.createElement("span");
     name.className = "plan-name";
     name.textContent = title;
-    const meta = document.createElement("span");
-    meta.className = "plan-meta";
-    meta.textContent = [formatDate(run.created_at), run.source === "live" ? "live" : run.source.toUpperCase(), `${run.fix_count} fixes`]
-      .filter(Boolean)
-      .join(" · ");
-    open.append(name, meta);
-    open.addEventListener("click", () => openRun(run.id));
+    const details = document.createElement("span");
+    details.className = "plan-meta";
+    details.textContent = meta.filter(Boolean).join(" · ");
+    open.append(name, details);
+    open.addEventListener("click", onOpen);
     item.append(open);
     return item;
+  }
+
+  function runItem(run) {
+    const title = run.name || t("Run {id}", { id: String(run.id) });
+    return listItem({
+      id: `run-${run.id}`,
+      title,
+      label: t("Open run {name}", { name: title }),
+      meta: [formatDate(run.created_at), sourceLabel(run.source), tn("{count} fix", "{count} fixes", run.fix_count, { count: run.fix_count })],
+      onOpen: () => openRun(run.id),
+    });
+  }
+
+  function simulationItem(simulation) {
+    const title = t("Simulation {id}", { id: String(simulation.id) });
+    return listItem({
+      id: `simulation-${simulation.id}`,
+      title,
+      label: t("Open simulation {name}", { name: title }),
+      meta: [formatDate(simulation.created_at), simulationLabel(simulation.config), formatDuration(simulation.metrics?.time_s)],
+      onOpen: () => openSimulation(simulation.id),
+    });
   }
 
   async function refreshRuns() {
@@ -216,10 +260,23 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
       return;
     }
     try {
-      const { items } = await api.listRuns(planId);
+      const [runs, simulations] = await Promise.all([api.listRuns(planId), api.listSimulations(planId)]);
       if (planId !== state.planId) return;
-      ui.runs.replaceChildren(...items.map(runItem));
+      const items = [
+        ...simulations.items.map((s) => ({ at: s.created_at, node: simulationItem(s) })),
+        ...runs.items.map((r) => ({ at: r.created_at, node: runItem(r) })),
+      ].sort((a, b) => (a.at < b.at ? 1 : a.at > b.at ? -1 : 0));
+      ui.runs.replaceChildren(...items.map((i) => i.node));
       ui.runsEmpty.hidden = items.length > 0;
+    } catch (error) {
+      showFailure(error);
+    }
+  }
+
+  async function openSimulation(id) {
+    clearError();
+    try {
+      showSimulation(await api.readSimulation(id));
     } catch (error) {
       showFailure(error);
     }
@@ -241,7 +298,7 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     const seq = ++state.seq;
     ui.simulate.disabled = true;
     ui.card.setAttribute("aria-busy", "true");
-    setStatus("Simulating the tractor…");
+    setStatus(t("Simulating the tractor…"), { sticky: true });
     try {
       const body = {
         seed: Math.floor(Math.random() * 1_000_000),
@@ -251,7 +308,8 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
       const simulation = await api.simulate(planId, body);
       if (seq !== state.seq || planId !== state.planId) return;
       showSimulation(simulation);
-      setStatus(`Simulated run: ${formatDuration(simulation.metrics.time_s)}.`);
+      onResult(t("Simulated run: {time}.", { time: formatDuration(simulation.metrics.time_s) }));
+      refreshRuns();
     } catch (error) {
       if (seq === state.seq) {
         setStatus("");
@@ -269,12 +327,12 @@ export function setUpChecks({ map, api, setStatus, showFailure, clearError }) {
     clearError();
     ui.upload.disabled = true;
     ui.card.setAttribute("aria-busy", "true");
-    setStatus(`Uploading ${file.name}…`);
+    setStatus(t("Uploading {file}…", { file: file.name }), { sticky: true });
     try {
       const run = await api.uploadRun(planId, file);
       if (planId !== state.planId) return;
       showRun(run);
-      setStatus(`Uploaded ${file.name}: ${run.fix_count} fixes.`);
+      onResult(tn("Uploaded {file}: {count} fix.", "Uploaded {file}: {count} fixes.", run.fix_count, { file: file.name, count: run.fix_count }));
       await refreshRuns();
     } catch (error) {
       setStatus("");

@@ -3,6 +3,8 @@
 // the start and finish, and an `interval_m` property sets the interval. Only reading happens
 // here; checking the polygon is the planner's job, so the API's error names any problem.
 
+import { t } from "./i18n.js";
+
 /** A file that cannot be used as a field; `message` is meant for the person who chose it. */
 export class FieldFileError extends Error {}
 
@@ -12,7 +14,7 @@ function featuresOf(data) {
   if (typeof data?.type === "string" && "coordinates" in data) {
     return [{ type: "Feature", properties: {}, geometry: data }];
   }
-  throw new FieldFileError("Import field: this file is not GeoJSON (no features or geometry found).");
+  throw new FieldFileError(t("Import field: this file is not GeoJSON (no features or geometry found)."));
 }
 
 /** The first polygon; a MultiPolygon of exactly one polygon counts as that polygon. */
@@ -25,7 +27,7 @@ function findPolygon(features) {
     }
   }
   throw new FieldFileError(
-    "Import field: the file has no field boundary (a Polygon). Draw the field instead, or export it as GeoJSON polygon.",
+    t("Import field: the file has no field boundary (a Polygon). Draw the field instead, or export it as GeoJSON polygon."),
   );
 }
 
@@ -41,14 +43,14 @@ function findPoint(features, role) {
 function checkLonLat(polygon) {
   const ring = polygon.coordinates?.[0];
   if (!Array.isArray(ring) || ring.length < 4) {
-    throw new FieldFileError("Import field: the boundary needs at least three corners.");
+    throw new FieldFileError(t("Import field: the boundary needs at least three corners."));
   }
   const outside = ring.some(
     ([lon, lat]) => !(Math.abs(lon) <= 180 && Math.abs(lat) <= 90),
   );
   if (outside) {
     throw new FieldFileError(
-      "Import field: the coordinates are not longitude and latitude (WGS84). Save the file as GeoJSON in EPSG:4326.",
+      t("Import field: the coordinates are not longitude and latitude (WGS84). Save the file as GeoJSON in EPSG:4326."),
     );
   }
 }
@@ -76,7 +78,7 @@ export function readFieldFile(text) {
   try {
     data = JSON.parse(text);
   } catch {
-    throw new FieldFileError("Import field: this file is not GeoJSON (it is not valid JSON).");
+    throw new FieldFileError(t("Import field: this file is not GeoJSON (it is not valid JSON)."));
   }
   const features = featuresOf(data);
   const { feature, polygon } = findPolygon(features);

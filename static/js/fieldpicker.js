@@ -8,15 +8,16 @@
 import { ApiError } from "./api.js";
 import { FieldFileError } from "./fieldfile.js";
 import { formatArea } from "./format.js";
+import { t, tapOrClick } from "./i18n.js";
 
 /** Words shown to the person, in one place so that they can be translated. */
 const TEXT = {
-  heading: (count, file) => `${file} holds ${count} fields: choose one`,
-  hint: "Click a field on the map or in the list.",
-  cancel: "Cancel",
-  importAll: (count) => `Add all ${count} to my fields`,
-  unnamed: (index) => `Field ${index + 1}`,
-  refused: (detail) => `Import field: ${detail}`,
+  heading: (count, file) => t("{file} holds {count} fields: choose one", { file, count }),
+  hint: tapOrClick(t("Tap a field on the map or in the list."), t("Click a field on the map or in the list.")),
+  cancel: t("Cancel"),
+  importAll: (count) => t("Add all {count} to my fields", { count }),
+  unnamed: (index) => t("Field {number}", { number: index + 1 }),
+  refused: (detail) => t("Import field: {problem}", { problem: detail }),
 };
 
 /** Closes the chooser on screen, if any (a second import, or Start over). */

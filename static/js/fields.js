@@ -2,6 +2,7 @@
 // map and a list; choosing one puts it on the map to plan it, "Delete" asks about its plans.
 
 import { csrfHeaders } from "./account.js";
+import { t, tn } from "./i18n.js";
 
 const $ = (id) => document.getElementById(id);
 
@@ -31,11 +32,14 @@ export function setUpFields({ map, apiUrl, loadField, onPlansChanged }) {
     box.className = "field-confirm";
     const question = document.createElement("span");
     question.textContent = field.plan_count
-      ? `Delete ${field.name}? It has ${field.plan_count} saved plans.`
-      : `Delete ${field.name}?`;
+      ? tn("Delete {name}? It has {count} saved plan.", "Delete {name}? It has {count} saved plans.", field.plan_count, {
+          name: field.name,
+          count: field.plan_count,
+        })
+      : t("Delete {name}?", { name: field.name });
     const choices = [
-      ["Delete field and plans", "delete"],
-      ["Delete field, keep plans", "keep"],
+      [t("Delete field and plans"), "delete"],
+      [t("Delete field, keep plans"), "keep"],
     ];
     const buttons = choices.map(([text, plans]) => {
       const button = document.createElement("button");
@@ -52,7 +56,7 @@ export function setUpFields({ map, apiUrl, loadField, onPlansChanged }) {
     const cancel = document.createElement("button");
     cancel.type = "button";
     cancel.className = "quiet small";
-    cancel.textContent = "Cancel";
+    cancel.textContent = t("Cancel");
     cancel.addEventListener("click", () => box.remove());
     box.append(question, ...buttons, cancel);
     item.append(box);
@@ -64,20 +68,20 @@ export function setUpFields({ map, apiUrl, loadField, onPlansChanged }) {
     const open = document.createElement("button");
     open.type = "button";
     open.className = "open-plan";
-    open.setAttribute("aria-label", `Plan ${field.name}`);
+    open.setAttribute("aria-label", t("Plan {name}", { name: field.name }));
     const name = document.createElement("span");
     name.className = "plan-name";
     name.textContent = field.name;
     const meta = document.createElement("span");
     meta.className = "plan-meta";
-    meta.textContent = `${field.plan_count} plans`;
+    meta.textContent = tn("{count} plan", "{count} plans", field.plan_count, { count: field.plan_count });
     open.append(name, meta);
     open.addEventListener("click", () => loadField(field));
     const remove = document.createElement("button");
     remove.type = "button";
     remove.className = "quiet small";
-    remove.textContent = "Delete";
-    remove.setAttribute("aria-label", `Delete ${field.name}`);
+    remove.textContent = t("Delete");
+    remove.setAttribute("aria-label", t("Delete {name}", { name: field.name }));
     remove.addEventListener("click", () => confirmDelete(item, field));
     item.append(open, remove);
     return item;

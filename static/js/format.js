@@ -1,21 +1,39 @@
-// Turning the API's SI figures and error strings into words and units a farmer reads at a glance.
+// Turning the API's SI figures and error strings into words and units a farmer reads at a glance,
+// in the page's language: numbers through Intl (Indonesian writes 3,96 ha), words through t().
+
+import { lang, t } from "./i18n.js";
 
 const SQUARE_METRES_PER_HECTARE = 10_000;
+
+const formats = new Map();
+
+/** A number with exactly `digits` decimals, in the page's language (Indonesian: 3,96). */
+export function formatNumber(value, digits = 0) {
+  if (!formats.has(digits)) {
+    formats.set(
+      digits,
+      new Intl.NumberFormat(lang, { minimumFractionDigits: digits, maximumFractionDigits: digits, useGrouping: "min2" }),
+    );
+  }
+  return formats.get(digits).format(value);
+}
 
 /** Area in m² for small fields (with hectares beside it), in hectares from 1 ha up. */
 export function formatArea(squareMetres) {
   if (!Number.isFinite(squareMetres)) return "–";
   const hectares = squareMetres / SQUARE_METRES_PER_HECTARE;
-  if (hectares >= 1) return `${hectares.toFixed(2)} ha`;
-  const m2 = squareMetres.toFixed(squareMetres < 1000 ? 1 : 0);
-  return `${m2} m² (${hectares.toFixed(hectares < 0.1 ? 3 : 2)} ha)`;
+  if (hectares >= 1) return t("{area} ha", { area: formatNumber(hectares, 2) });
+  return t("{area} m² ({hectares} ha)", {
+    area: formatNumber(squareMetres, squareMetres < 1000 ? 1 : 0),
+    hectares: formatNumber(hectares, hectares < 0.1 ? 3 : 2),
+  });
 }
 
 /** Length in metres, or kilometres from 1 km up. */
 export function formatLength(metres) {
   if (!Number.isFinite(metres)) return "–";
-  if (metres >= 1000) return `${(metres / 1000).toFixed(2)} km`;
-  return `${metres.toFixed(metres < 100 ? 1 : 0)} m`;
+  if (metres >= 1000) return t("{length} km", { length: formatNumber(metres / 1000, 2) });
+  return t("{length} m", { length: formatNumber(metres, metres < 100 ? 1 : 0) });
 }
 
 /** Duration as min:s (or h:mm:ss from one hour up), the way a stopwatch shows it. */
@@ -25,43 +43,59 @@ export function formatDuration(seconds) {
   const h = Math.floor(total / 3600);
   const m = Math.floor((total % 3600) / 60);
   const s = String(total % 60).padStart(2, "0");
-  if (h > 0) return `${h}:${String(m).padStart(2, "0")}:${s} h`;
-  return `${m}:${s} min`;
+  if (h > 0) return t("{time} h", { time: `${h}:${String(m).padStart(2, "0")}:${s}` });
+  return t("{time} min", { time: `${m}:${s}` });
 }
 
 /** A 0–1 ratio as a percentage with one decimal. */
 export function formatPercent(ratio) {
   if (!Number.isFinite(ratio)) return "–";
-  return `${(ratio * 100).toFixed(1)} %`;
+  return `${formatNumber(ratio * 100, 1)} %`;
 }
 
 /** A heading in degrees clockwise from north. */
 export function formatAngle(degrees) {
   if (!Number.isFinite(degrees)) return "–";
-  return `${degrees.toFixed(1)}°`;
+  return `${formatNumber(degrees, 1)}°`;
+}
+
+/** An error or distance in metres with centimetres, or a dash when there is none. */
+export function formatMetres(value) {
+  if (!Number.isFinite(value)) return "–";
+  return t("{length} m", { length: formatNumber(value, 2) });
 }
 
 /** The API names inputs as its JSON does; people know them by the labels on the page. */
 export const INPUT_LABELS = {
-  name: "Plan name",
-  field: "Field",
-  interval_m: "Interval (m)",
-  start: "Start",
-  finish: "Finish",
-  angle_deg: "Line angle (°)",
-  objective: "Objective",
-  headland_passes: "Headland passes",
-  speed_mps: "Speed (m/s)",
+  name: t("Plan name"),
+  field: t("Field"),
+  interval_m: t("Interval (m)"),
+  start: t("Start"),
+  finish: t("Finish"),
+  angle_deg: t("Line angle (°)"),
+  objective: t("Objective"),
+  headland_passes: t("Headland passes"),
+  speed_mps: t("Speed (m/s)"),
+  file: t("Track file"),
+  username: t("Username"),
+  password: t("Password"),
+  organisation: t("Organisation"),
+};
+
+/** Inputs whose problem reads as the end of a sentence about them ("This file has no fix."). */
+const SENTENCE_INPUTS = {
+  file: (problem) => t("This file {problem}", { problem }),
 };
 
 /** What to do about a problem with each input, added after the API's own words. */
 const INPUT_ADVICE = {
-  field: "Edit the boundary on the map, or draw or import it again.",
-  interval_m: "The interval is the working width of the tractor in metres, for example 4.",
-  start: "Move the start marker nearer the field.",
-  finish: "Move the finish marker nearer the field.",
-  angle_deg: "Use 0 to 179, or leave it empty to let tillpath choose.",
-  speed_mps: "A hand tractor works at about 0.56 m/s.",
+  field: t("Edit the boundary on the map, or draw or import it again."),
+  interval_m: t("The interval is the working width of the tractor in metres, for example 4."),
+  start: t("Move the start marker nearer the field."),
+  finish: t("Move the finish marker nearer the field."),
+  angle_deg: t("Use 0 to 179, or leave it empty to let tillpath choose."),
+  speed_mps: t("A hand tractor works at about 0.56 m/s."),
+  file: t("Choose the tractor's log: a GPX track, a CSV file (time,lat,lon) or an NMEA log."),
 };
 
 /**
@@ -103,34 +137,40 @@ function sentence(text, { capitalise = false } = {}) {
 export function friendlyError(status, detail) {
   if (status === 0) {
     return {
-      message: "Cannot reach the tillpath server. Check the connection and try again.",
+      message: t(
+        "Cannot reach the tillpath server: planning, saving and simulating need it. Your field and inputs are kept on this phone; try again when the connection is back.",
+      ),
       input: null,
     };
   }
   if (status === 404) {
-    return { message: "This plan no longer exists; it may have been deleted.", input: null };
+    return { message: t("This plan no longer exists; it may have been deleted."), input: null };
   }
   if (status === 413) {
     return {
-      message: "The field is too big to send. Simplify the boundary (fewer corners) and try again.",
+      message: t("The field or file is too big to send. Simplify the boundary (fewer corners) or send a smaller file."),
       input: null,
     };
   }
   if (status >= 500) {
     return {
-      message: "Something went wrong on the server. Try again; if it keeps happening, tell the person who runs tillpath.",
+      message: t("Something went wrong on the server. Try again; if it keeps happening, tell the person who runs tillpath."),
       input: null,
     };
   }
   const { input, problem } = parseDetail(detailText(detail));
-  if (!input) return { message: sentence(problem, { capitalise: true }) || `The request was refused (error ${status}).`, input: null };
+  if (!input) {
+    const message = sentence(problem, { capitalise: true }) || t("The request was refused (error {status}).", { status: String(status) });
+    return { message, input: null };
+  }
   const advice = INPUT_ADVICE[input] ? ` ${INPUT_ADVICE[input]}` : "";
-  return { message: `${INPUT_LABELS[input]}: ${sentence(problem)}${advice}`, input };
+  if (SENTENCE_INPUTS[input]) return { message: SENTENCE_INPUTS[input](sentence(problem)) + advice, input };
+  return { message: t("{input}: {problem}", { input: INPUT_LABELS[input], problem: sentence(problem) }) + advice, input };
 }
 
 /** A saved plan's date in the reader's own words and time zone. */
 export function formatDate(isoText) {
   const date = new Date(isoText);
   if (Number.isNaN(date.getTime())) return "";
-  return date.toLocaleString(undefined, { dateStyle: "medium", timeStyle: "short" });
+  return date.toLocaleString(lang, { dateStyle: "medium", timeStyle: "short" });
 }

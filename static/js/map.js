@@ -1,36 +1,46 @@
-// The map page: draw or import a field, place start and finish, ask the API for a path, show it,
-// save it, download it. The page holds what the person drew and typed; the API does all the
-// planning (style.md §4), so nothing here computes geometry beyond drawing it.
+// The map page: draw, walk or import a field, place start and finish, ask the API for a path,
+// show it, save it, download it. The page holds what the person drew and typed (and keeps it on
+// the phone as a draft); the API does all the planning (style.md §4), so nothing here computes
+// geometry beyond drawing it. Every word shown goes through t() (i18n.js).
 
 /* global L */
 
 import { signIn } from "./account.js";
 import { ApiError, ChecksApi, PlansApi, postForm } from "./api.js";
+import { DEFAULT_SPEED_MPS, fillForm, fillFormValues, formValues, numberInput } from "./form.js";
+import {
+  clearError,
+  PHONE_QUERY,
+  revealMapOnPhone,
+  setPanelOpen,
+  setStatus,
+  showError,
+  showFailure,
+  showResultOnPhone,
+  updateNotice,
+} from "./messages.js";
 import { setUpChecks } from "./checks.js";
-import { FieldFileError, polygonOf } from "./fieldfile.js";
+import { polygonOf } from "./fieldfile.js";
 import { chooseField, closeFieldChooser, parseFieldFile } from "./fieldpicker.js";
 import {
   formatAngle,
   formatArea,
-  formatDate,
   formatDuration,
   formatLength,
+  formatNumber,
   formatPercent,
-  friendlyError,
 } from "./format.js";
 import { setUpFields } from "./fields.js";
+import { restoreLanguageChoice, switchLanguage, t, tapOrClick, tn } from "./i18n.js";
+import { queueSave, registerServiceWorker, watchConnection } from "./offline.js";
+import { createMap, FIELD_STYLE, setUpGeoman } from "./basemap.js";
 import { drawPlan } from "./planlayer.js";
-import { fillVehicle, setUpVehicle, vehicleControls, vehicleRequest } from "./vehicle.js";
+import { fillVehicle, setUpVehicle, vehicleRequest } from "./vehicle.js";
+import { planTitle, setUpSavedPlans } from "./savedplans.js";
+import { forget, KEYS, readStored, store } from "./storage.js";
+import { goToCoordinates, setUpWalkControls } from "./walk.js";
 
-/** Ketewel, Gianyar, Bali: the paper's field trial, a sensible first view for the farmers we serve. */
-const DEFAULT_VIEW = { lat: -8.6264, lng: 115.2981, zoom: 18 };
-const VIEW_KEY = "tillpath.view";
-const BASE_LAYER_KEY = "tillpath.baseLayer";
-const DEFAULT_SPEED_MPS = 0.56;
-/** Narrow screens get the map full-screen and the controls in a sheet (see app.css). */
-const PHONE_QUERY = window.matchMedia("(max-width: 720px)");
 
-const FIELD_STYLE = { color: "#ffd54a", weight: 3, fillColor: "#ffd54a", fillOpacity: 0.12 };
 
 const $ = (id) => document.getElementById(id);
 
@@ -38,14 +48,15 @@ const ui = {
   app: $("app"),
   panel: $("panel"),
   panelToggle: $("panel-toggle"),
-  alert: $("alert"),
-  status: $("status"),
+  language: $("language"),
   drawField: $("draw-field"),
   importField: $("import-field"),
   importFile: $("import-file"),
   setStart: $("set-start"),
   setFinish: $("set-finish"),
   clearAll: $("clear-all"),
+  gotoForm: $("goto-form"),
+  goto: $("goto"),
   interval: $("interval"),
   angle: $("angle"),
   objective: $("objective"),
@@ -58,18 +69,6 @@ const ui = {
   summaryEmpty: $("summary-empty"),
   summaryFigures: $("summary-figures"),
   downloads: $("downloads"),
-  savedPlans: $("saved-plans"),
-  savedEmpty: $("saved-empty"),
-};
-
-/** Which form control shows each API input, to point at it when the API refuses it. */
-const INPUT_CONTROLS = {
-  name: ui.planName,
-  interval_m: ui.interval,
-  angle_deg: ui.angle,
-  objective: ui.objective,
-  headland_passes: ui.headland,
-  speed_mps: ui.speed,
 };
 
 const state = {
@@ -83,213 +82,24 @@ const state = {
   placing: null, // "start" | "finish" while waiting for a map click
   requestSeq: 0, // answers to superseded requests are dropped
   checks: null, // simulations and runs of the stored plan (checks.js)
+  saved: null, // the Saved plans list (savedplans.js)
+  fields: null, // the organisation's field registry (fields.js)
   parseUrl: null, // POST /api/fields/parse: the server's reader of field files
   importSeq: 0, // a newer import supersedes a field choice still open
+  signedIn: false, // false while the server could not be reached to sign in (offline)
+  walker: null, // Walk the boundary (walk.js)
+  restoring: false, // while the draft is put back, changes are not stored again
 };
 
-// ---------------------------------------------------------------- messages
-
-function setStatus(text) {
-  ui.status.textContent = text;
-}
-
-function clearError() {
-  ui.alert.textContent = "";
-  for (const control of Object.values(INPUT_CONTROLS)) control.removeAttribute("aria-invalid");
-}
-
-/** Show a problem in the alert region and point at the control it concerns. */
-function showError(message, input = null) {
-  clearError();
-  ui.alert.textContent = message;
-  setPanelOpen(true); // on a phone the alert would otherwise hide behind the map
-  const control = INPUT_CONTROLS[input] ?? vehicleControls()[input];
-  if (control) {
-    control.setAttribute("aria-invalid", "true");
-    control.focus();
-  }
-}
-
-function showFailure(error) {
-  if (error instanceof ApiError) {
-    const { message, input } = friendlyError(error.status, error.detail);
-    showError(message, input);
-  } else if (error instanceof FieldFileError) {
-    showError(error.message);
-  } else {
-    console.error(error);
-    showError(`Something went wrong in the page: ${error?.message ?? error}`);
-  }
-}
-
-// ---------------------------------------------------------------- panel (phones)
-
-function setPanelOpen(open) {
-  ui.app.classList.toggle("panel-open", open);
-  ui.panelToggle.setAttribute("aria-expanded", String(open));
-}
-
-/** On a phone, get the sheet out of the way when the next step is a tap on the map. */
-function revealMapOnPhone() {
-  if (PHONE_QUERY.matches) setPanelOpen(false);
-}
-
-// ---------------------------------------------------------------- the map
-
-function tileLayer(url, attribution) {
-  // Tiles exist to zoom 19; a field of a few ares needs closer, so Leaflet scales them up.
-  return L.tileLayer(url, { attribution, maxNativeZoom: 19, maxZoom: 22 });
-}
-
-function baseLayers(dataset) {
-  const layers = {};
-  if (dataset.satelliteTileUrl) {
-    layers.Satellite = tileLayer(
-      dataset.satelliteTileUrl,
-      "Imagery &copy; Esri, Maxar, Earthstar Geographics, and the GIS User Community",
+/** A boundary whose edges cross (a bow tie) cannot be tilled as one field: say so at once. */
+function checkSelfIntersection(layer) {
+  if (layer.pm?.hasSelfIntersection?.()) {
+    showError(
+      t("Field: the boundary crosses itself (like a bow tie). Move the corners so that no edges cross, or draw the field again."),
     );
+    return true;
   }
-  if (dataset.streetTileUrl) {
-    layers.OpenStreetMap = tileLayer(
-      dataset.streetTileUrl,
-      '&copy; <a href="https://www.openstreetmap.org/copyright">OpenStreetMap</a> contributors',
-    );
-  }
-  return layers;
-}
-
-/** localStorage, which private modes and locked-down browsers may refuse: then we forget. */
-function readStored(key) {
-  try {
-    return JSON.parse(localStorage.getItem(key));
-  } catch {
-    return null;
-  }
-}
-
-function store(key, value) {
-  try {
-    localStorage.setItem(key, JSON.stringify(value));
-  } catch {
-    // Remembering is a convenience only.
-  }
-}
-
-/** Where the person last looked, so the map reopens on their own fields. */
-function savedView() {
-  const view = readStored(VIEW_KEY);
-  const valid = ["lat", "lng", "zoom"].every((key) => Number.isFinite(view?.[key]));
-  return valid ? view : DEFAULT_VIEW;
-}
-
-function createMap(dataset) {
-  const view = savedView();
-  // Half zoom steps let a small field fill the screen when the map fits it.
-  const map = L.map("map", { zoomControl: true, maxZoom: 22, minZoom: 2, zoomSnap: 0.5 }).setView(
-    [view.lat, view.lng],
-    view.zoom,
-  );
-  const layers = baseLayers(dataset);
-  const names = Object.keys(layers);
-  if (names.length > 0) {
-    const preferred = readStored(BASE_LAYER_KEY);
-    layers[names.includes(preferred) ? preferred : names[0]].addTo(map);
-    L.control.layers(layers, null, { position: "topright" }).addTo(map);
-    map.on("baselayerchange", (event) => store(BASE_LAYER_KEY, event.name));
-  }
-  addLocateControl(map);
-  L.control.scale({ metric: true, imperial: false, position: "bottomright" }).addTo(map);
-  map.on("moveend", () => {
-    const { lat, lng } = map.getCenter();
-    store(VIEW_KEY, { lat, lng, zoom: map.getZoom() });
-  });
-  return map;
-}
-
-/** Zoom at which "Show my location" shows the person's surroundings: a few fields across. */
-const LOCATE_ZOOM = 19;
-
-/**
- * A map button that centres the map on the phone's GPS position: in the field, the quickest
- * way to find the field. Browsers allow it on HTTPS (and localhost) only.
- */
-function addLocateControl(map) {
-  const Locate = L.Control.extend({
-    options: { position: "topright" },
-    onAdd() {
-      const button = L.DomUtil.create("button", "locate-button leaflet-bar");
-      button.type = "button";
-      button.title = "Show my location";
-      button.setAttribute("aria-label", "Show my location");
-      L.DomEvent.disableClickPropagation(button);
-      L.DomEvent.on(button, "click", () => {
-        setStatus("Finding your location…");
-        map.locate({ setView: true, maxZoom: LOCATE_ZOOM, enableHighAccuracy: true, timeout: 15000 });
-      });
-      return button;
-    },
-  });
-  new Locate().addTo(map);
-  let here = null;
-  map.on("locationfound", (event) => {
-    here?.remove();
-    here = L.circle(event.latlng, {
-      radius: event.accuracy / 2,
-      color: "#2f7de1",
-      weight: 2,
-      fillOpacity: 0.15,
-      interactive: false,
-      pmIgnore: true,
-    }).addTo(map);
-    setStatus(`You are here (± ${Math.round(event.accuracy / 2)} m).`);
-  });
-  map.on("locationerror", (event) => {
-    setStatus("");
-    showError(`Cannot find your location: ${event.message}. Allow location access, or find the field on the map.`);
-  });
-}
-
-/** Geoman's toolbar buttons carry their name only as a tooltip; give it to screen readers too. */
-function nameToolbarButtons(map) {
-  for (const container of map.getContainer().querySelectorAll(".leaflet-pm-toolbar .button-container")) {
-    const button = container.querySelector("a[role='button'], .leaflet-buttons-control-button");
-    if (button && container.title) button.setAttribute("aria-label", container.title);
-  }
-}
-
-function setUpGeoman(map) {
-  map.pm.setGlobalOptions({
-    allowSelfIntersection: false, // a boundary that crosses itself cannot be planned
-    snappable: true,
-    pathOptions: FIELD_STYLE,
-    templineStyle: { color: FIELD_STYLE.color },
-    hintlineStyle: { color: FIELD_STYLE.color, dashArray: "5 5" },
-  });
-  // Only what a field needs: polygon and rectangle, editing corners, moving, cutting holes
-  // (ponds, huts, trees) and removing.
-  map.pm.addControls({
-    position: "topleft",
-    drawMarker: false,
-    drawCircleMarker: false,
-    drawPolyline: false,
-    drawCircle: false,
-    drawText: false,
-    rotateMode: false,
-  });
-  nameToolbarButtons(map);
-  map.on("pm:create", (event) => {
-    if (event.layer instanceof L.Polygon) adoptField(event.layer, { replot: false });
-  });
-  map.on("pm:drawend", () => setStatus(""));
-  map.on("pm:cut", (event) => {
-    if (event.originalLayer === state.field) adoptField(event.layer, { replot: true });
-  });
-  map.on("pm:remove", (event) => {
-    if (event.layer === state.field) {
-      state.field = null;
-      removePlan();
-    }
-  });
+  return false;
 }
 
 // ---------------------------------------------------------------- field, start, finish
@@ -299,9 +109,13 @@ function adoptField(layer, { replot }) {
   if (state.field && state.field !== layer) state.field.remove();
   state.field = layer;
   layer.setStyle(FIELD_STYLE);
-  layer.on("pm:edit pm:dragend", () => replanIfPlanned());
+  layer.on("pm:edit pm:dragend", () => {
+    saveDraft();
+    if (!checkSelfIntersection(layer)) replanIfPlanned();
+  });
   if (replot) replanIfPlanned();
   else removePlan();
+  saveDraft();
 }
 
 function fieldFromPolygon(polygon) {
@@ -312,15 +126,22 @@ function fieldFromPolygon(polygon) {
 }
 
 /** The field as a GeoJSON Polygon, full precision; null (with an alert) when there is none. */
-function fieldGeometry() {
+function fieldGeometry({ quiet = false } = {}) {
   if (!state.field) {
-    showError("Field: there is no field yet. Press Draw field and click its corners on the map, or use Import field.");
+    if (!quiet) {
+      showError(
+        tapOrClick(
+          t("Field: there is no field yet. Press Draw field and tap its corners on the map, or use Import field."),
+          t("Field: there is no field yet. Press Draw field and click its corners on the map, or use Import field."),
+        ),
+      );
+    }
     return null;
   }
   const geometry = state.field.toGeoJSON(false).geometry;
   if (geometry.type === "MultiPolygon") {
     if (geometry.coordinates.length === 1) return { type: "Polygon", coordinates: geometry.coordinates[0] };
-    showError("Field: the cut split the field into separate pieces. Plan one piece at a time: remove the others.");
+    if (!quiet) showError(t("Field: the cut split the field into separate pieces. Plan one piece at a time: remove the others."));
     return null;
   }
   return geometry;
@@ -343,7 +164,7 @@ function placeMarker(role, position) {
   state.markers[role] = null;
   if (!position) return;
   const latlng = Array.isArray(position) ? L.latLng(position[1], position[0]) : position;
-  const title = role === "start" ? "Start (drag to move)" : "Finish (drag to move)";
+  const title = role === "start" ? t("Start (drag to move)") : t("Finish (drag to move)");
   const marker = L.marker(latlng, {
     icon: endpointIcon(role),
     draggable: true,
@@ -353,7 +174,10 @@ function placeMarker(role, position) {
   }).addTo(state.map);
   // The pin's letter would be its accessible name; the title says what it is and what to do.
   marker.getElement()?.setAttribute("aria-label", title);
-  marker.on("dragend", () => replanIfPlanned());
+  marker.on("dragend", () => {
+    saveDraft();
+    replanIfPlanned();
+  });
   state.markers[role] = marker;
 }
 
@@ -370,11 +194,16 @@ function beginPlacing(role) {
   ui.app.classList.add("placing");
   ui.setStart.setAttribute("aria-pressed", String(role === "start"));
   ui.setFinish.setAttribute("aria-pressed", String(role === "finish"));
-  setStatus(role === "start" ? "Tap the map where the tractor starts." : "Tap the map where the tractor must finish.");
+  const prompt =
+    role === "start"
+      ? tapOrClick(t("Tap the map where the tractor starts."), t("Click the map where the tractor starts."))
+      : tapOrClick(t("Tap the map where the tractor must finish."), t("Click the map where the tractor must finish."));
+  setStatus(prompt, { sticky: true });
   revealMapOnPhone();
 }
 
 function endPlacing() {
+  if (!state.placing) return;
   state.placing = null;
   ui.app.classList.remove("placing");
   ui.setStart.setAttribute("aria-pressed", "false");
@@ -387,45 +216,35 @@ function onMapClick(event) {
   const role = state.placing;
   endPlacing();
   placeMarker(role, event.latlng);
+  saveDraft();
   replanIfPlanned();
 }
 
 function startDrawing() {
   endPlacing();
+  state.walker.end();
   clearError();
   state.map.pm.enableDraw("Polygon", { finishOn: null });
-  setStatus("Click the corners of the field. Click the first corner again to close it.");
+  setStatus(
+    tapOrClick(
+      t("Tap the corners of the field. Tap the first corner again to close it."),
+      t("Click the corners of the field. Click the first corner again to close it."),
+    ),
+    { sticky: true },
+  );
   revealMapOnPhone();
 }
 
 // ---------------------------------------------------------------- the form
-
-/** A decimal typed with a point or a comma; NaN when it is not a number, null when empty. */
-function parseDecimal(text) {
-  const cleaned = text.trim().replace(",", ".");
-  if (cleaned === "") return null;
-  return /^[-+]?(\d+\.?\d*|\.\d+)$/.test(cleaned) ? Number(cleaned) : Number.NaN;
-}
-
-function numberInput(control, label, { required = false, fallback = null } = {}) {
-  const value = parseDecimal(control.value);
-  if (value === null && !required) return { value: fallback };
-  if (value === null || Number.isNaN(value)) {
-    const typed = control.value.trim();
-    const why = typed ? `“${typed}” is not a number` : "this is empty";
-    return { error: `${label}: ${why}. Type a number, for example ${control.placeholder.replace("e.g. ", "") || 4}.` };
-  }
-  return { value };
-}
 
 /** The request body of product.md §3 from the page; null (with an alert) when incomplete. */
 function buildRequest() {
   const field = fieldGeometry();
   if (!field) return null;
   const inputs = {
-    interval_m: numberInput(ui.interval, "Interval (m)", { required: true }),
-    angle_deg: numberInput(ui.angle, "Line angle (°)"),
-    speed_mps: numberInput(ui.speed, "Speed (m/s)", { fallback: DEFAULT_SPEED_MPS }),
+    interval_m: numberInput(ui.interval, t("Interval (m)"), { required: true, example: "4" }),
+    angle_deg: numberInput(ui.angle, t("Line angle (°)"), { example: t("90 (east–west), or leave it empty") }),
+    speed_mps: numberInput(ui.speed, t("Speed (m/s)"), { fallback: DEFAULT_SPEED_MPS, example: "0.56" }),
   };
   for (const [name, result] of Object.entries(inputs)) {
     if (result.error) {
@@ -452,26 +271,44 @@ function buildRequest() {
   };
 }
 
-function fillForm(request, name) {
-  ui.interval.value = request.interval_m ?? "";
-  ui.angle.value = request.angle_deg ?? "";
-  ui.objective.value = request.objective ?? "shortest_path";
-  ui.headland.value = String(request.headland_passes ?? 0);
-  ui.speed.value = request.speed_mps ?? DEFAULT_SPEED_MPS;
-  ui.planName.value = name ?? request.name ?? "";
-  fillVehicle(request);
+// ---------------------------------------------------------------- the draft
+
+/** Keep the field, the markers and the inputs on the phone: a reload or no network loses nothing. */
+function saveDraft() {
+  if (state.restoring) return;
+  store(KEYS.draft, {
+    field: state.field ? fieldGeometry({ quiet: true }) : null,
+    start: markerLonLat("start"),
+    finish: markerLonLat("finish"),
+    form: formValues(ui),
+    planned: state.plan != null,
+    savedId: state.savedId,
+  });
+}
+
+/** Put the draft back after a reload; open its stored plan, or plan it again, when online. */
+function restoreDraft() {
+  const draft = readStored(KEYS.draft);
+  if (!draft) return;
+  state.restoring = true;
+  try {
+    fillFormValues(ui, draft.form);
+    if (draft.field?.type === "Polygon") fieldFromPolygon(draft.field);
+    placeMarker("start", draft.start);
+    placeMarker("finish", draft.finish);
+  } finally {
+    state.restoring = false;
+  }
+  if (draft.savedId != null) openPlan(draft.savedId, { quiet: true, keepDraft: true });
+  else if (draft.planned && state.field && navigator.onLine) generate({ quiet: true });
 }
 
 // ---------------------------------------------------------------- plans
 
-function planTitle(plan) {
-  return plan.name || `Plan ${plan.id}`;
-}
-
 function renderSummary(stats) {
   const figures = {
-    lines: String(stats.line_count),
-    waypoints: String(stats.waypoint_count),
+    lines: formatNumber(stats.line_count),
+    waypoints: formatNumber(stats.waypoint_count),
     area: formatArea(stats.area_m2),
     length: formatLength(stats.path_length_m),
     time: formatDuration(stats.estimated_time_s),
@@ -502,7 +339,7 @@ function removePlan() {
   ui.summaryFigures.hidden = true;
   ui.summaryEmpty.hidden = false;
   renderDownloads();
-  markCurrentSavedPlan();
+  state.saved?.markCurrent();
   state.checks?.planChanged(null);
 }
 
@@ -513,8 +350,9 @@ function showPlan(plan, { saved }) {
   state.planDrawing = drawPlan(state.map, plan.geojson);
   renderSummary(plan.stats);
   renderDownloads();
-  markCurrentSavedPlan();
+  state.saved?.markCurrent();
   state.checks?.planChanged(state.savedId);
+  saveDraft();
 }
 
 /** Fit `bounds`, keeping clear of the controls sheet when it covers the map on a phone. */
@@ -536,34 +374,66 @@ function setBusy(busy) {
   ui.summary.setAttribute("aria-busy", String(busy));
 }
 
+/** Saving with no connection: keep the plan on the phone and send it when the network is back. */
+function saveLater(request) {
+  if (!queueSave(request)) return false;
+  updateNotice();
+  setStatus(t("No connection: the plan is kept on this phone and will be saved when the connection is back."));
+  return true;
+}
+
 /** Ask the API for a plan from the page's inputs; `save` stores it too. */
-async function generate({ save = false } = {}) {
+async function generate({ save = false, quiet = false } = {}) {
   endPlacing();
   clearError();
   const request = buildRequest();
-  if (!request) return;
+  if (!request) {
+    // What is drawn must match what was asked: an old path beside "not a number" misleads.
+    state.requestSeq += 1;
+    removePlan();
+    saveDraft();
+    return;
+  }
   state.requestSeq += 1;
   const seq = state.requestSeq;
   setBusy(true);
-  setStatus(save ? "Saving the plan…" : "Planning the path…");
+  setStatus(save ? t("Saving the plan…") : t("Planning the path…"), { sticky: true });
   try {
     const plan = save ? await state.api.create(request) : await state.api.preview(request);
     if (seq !== state.requestSeq) return; // a newer request (a marker dragged again) wins
+    const sheetWasOpen = ui.app.classList.contains("panel-open");
     showPlan(plan, { saved: save });
-    const lines = `${plan.stats.line_count} line${plan.stats.line_count === 1 ? "" : "s"}`;
-    setStatus(save ? `Saved “${planTitle(plan)}”.` : `Path ready: ${lines}.`);
-    if (save) await refreshSavedPlans();
+    const lines = tn("{count} line", "{count} lines", plan.stats.line_count, { count: plan.stats.line_count });
+    const result = save ? t("Saved “{name}”.", { name: planTitle(plan) }) : t("Path ready: {lines}.", { lines });
+    if (quiet) setStatus("");
+    else showResultOnPhone(result);
+    if (!quiet) fitMapToPlanOnPhone(sheetWasOpen);
+    if (save) {
+      await state.saved.refresh();
+      state.fields?.refresh(); // a saved plan may have added a field to the registry
+    }
   } catch (error) {
     if (seq === state.requestSeq) {
       setStatus("");
+      if (save && error instanceof ApiError && error.status === 0 && saveLater(request)) return;
       // What is drawn must match what was asked, or be nothing: a path for the old start or
       // the old boundary beside an error would mislead.
       removePlan();
-      showFailure(error);
+      saveDraft();
+      if (!quiet) showFailure(error);
     }
   } finally {
     if (seq === state.requestSeq) setBusy(false);
   }
+}
+
+/**
+ * On a phone the sheet folds after a result: when it was open, it hid part of the map, so fit
+ * the whole path to the screen it leaves; and whenever the path is partly off screen.
+ */
+function fitMapToPlanOnPhone(sheetWasOpen) {
+  if (!PHONE_QUERY.matches || !state.planDrawing?.bounds) return;
+  if (sheetWasOpen || !state.map.getBounds().contains(state.planDrawing.bounds)) fitMap(state.planDrawing.bounds);
 }
 
 /** One edit can fire several events (a cut is also an edit): plan once they have settled. */
@@ -581,84 +451,39 @@ function replanIfPlanned() {
 
 // ---------------------------------------------------------------- saved plans
 
-function markCurrentSavedPlan() {
-  for (const item of ui.savedPlans.children) {
-    const current = state.savedId != null && item.dataset.id === String(state.savedId);
-    item.classList.toggle("current", current);
-    if (current) item.setAttribute("aria-current", "true");
-    else item.removeAttribute("aria-current");
-  }
-}
-
-function savedPlanItem(plan) {
-  const title = planTitle(plan);
-  const item = document.createElement("li");
-  item.dataset.id = String(plan.id);
-
-  const open = document.createElement("button");
-  open.type = "button";
-  open.className = "open-plan";
-  open.setAttribute("aria-label", `Open ${title}`);
-  const name = document.createElement("span");
-  name.className = "plan-name";
-  name.textContent = title;
-  const meta = document.createElement("span");
-  meta.className = "plan-meta";
-  const stats = plan.stats ?? {};
-  meta.textContent = [formatDate(plan.created_at), `${stats.line_count} lines`, formatArea(stats.area_m2)]
-    .filter(Boolean)
-    .join(" · ");
-  open.append(name, meta);
-  open.addEventListener("click", () => openPlan(plan.id));
-
-  const remove = document.createElement("button");
-  remove.type = "button";
-  remove.className = "delete-plan quiet";
-  remove.textContent = "Delete";
-  remove.setAttribute("aria-label", `Delete ${title}`);
-  remove.addEventListener("click", () => deletePlan(plan.id, title));
-
-  item.append(open, remove);
-  return item;
-}
-
-async function refreshSavedPlans() {
-  try {
-    const { items, total } = await state.api.list({ limit: 50 });
-    ui.savedPlans.replaceChildren(...items.map(savedPlanItem));
-    ui.savedEmpty.hidden = items.length > 0;
-    ui.savedEmpty.textContent = "No saved plans yet.";
-    if (total > items.length) {
-      ui.savedEmpty.hidden = false;
-      ui.savedEmpty.textContent = `Showing the newest ${items.length} of ${total} plans.`;
-    }
-    markCurrentSavedPlan();
-    state.fields?.refresh(); // a saved plan may have added a field to the registry
-  } catch (error) {
-    showFailure(error);
-  }
-}
-
-async function openPlan(id) {
+async function openPlan(id, { quiet = false } = {}) {
   endPlacing();
   clearError();
   try {
     const plan = await state.api.read(id);
     const request = plan.request ?? {};
-    fillForm(request, plan.name);
-    fieldFromPolygon(polygonOf(request.field));
-    placeMarker("start", request.start);
-    placeMarker("finish", request.finish);
+    state.restoring = true;
+    try {
+      fillForm(ui, request, plan.name);
+      fillVehicle(request);
+      fieldFromPolygon(polygonOf(request.field));
+      placeMarker("start", request.start);
+      placeMarker("finish", request.finish);
+    } finally {
+      state.restoring = false;
+    }
     showPlan(plan, { saved: true });
-    fitMap(state.planDrawing.bounds ?? state.field.getBounds());
-    setStatus(`Opened “${planTitle(plan)}”.`);
+    if (!quiet) {
+      fitMap(state.planDrawing.bounds ?? state.field.getBounds());
+      showResultOnPhone(t("Opened “{name}”.", { name: planTitle(plan) }));
+    }
   } catch (error) {
+    if (quiet) {
+      // The draft's stored plan is gone or the server is away: the draft itself stays.
+      if (!(error instanceof ApiError && error.status === 0)) saveDraft();
+      return;
+    }
     showFailure(error);
   }
 }
 
 async function deletePlan(id, title) {
-  if (!window.confirm(`Delete the plan “${title}”? This cannot be undone.`)) return;
+  if (!window.confirm(t("Delete the plan “{name}”? This cannot be undone.", { name: title }))) return;
   clearError();
   try {
     await state.api.remove(id);
@@ -667,12 +492,13 @@ async function deletePlan(id, title) {
       state.savedId = null;
       renderDownloads();
       state.checks?.planChanged(null);
+      saveDraft();
     }
-    setStatus(`Deleted “${title}”.`);
+    setStatus(t("Deleted “{name}”.", { name: title }));
   } catch (error) {
     if (!(error instanceof ApiError && error.status === 404)) showFailure(error);
   }
-  await refreshSavedPlans();
+  await state.saved.refresh();
 }
 
 // ---------------------------------------------------------------- import, start over
@@ -682,11 +508,15 @@ async function importField(file) {
   clearError();
   try {
     const seq = ++state.importSeq;
-    setStatus(`Reading ${file.name}…`);
+    setStatus(t("Reading {file}…", { file: file.name }), { sticky: true });
     // The server reads every import format (GeoJSON, KML/KMZ, zipped Shapefile, GeoPackage).
     const { fields, start, finish } = await parseFieldFile(state.parseUrl, file, postForm);
     closeFieldChooser();
-    if (fields.length > 1) setStatus(`Choose one of the ${fields.length} fields of ${file.name}.`);
+    if (fields.length > 1) {
+      setStatus(t("Choose one of the {count} fields of {file}.", { count: fields.length, file: file.name }), {
+        sticky: true,
+      });
+    }
     const chosen =
       fields.length === 1
         ? fields[0]
@@ -708,11 +538,13 @@ async function importField(file) {
     if (intervalM != null && intervalM > 0) ui.interval.value = String(intervalM);
     const title = name || id;
     if (title && !ui.planName.value.trim()) ui.planName.value = title;
+    saveDraft();
     const bounds = layer.getBounds();
     for (const marker of Object.values(state.markers)) if (marker) bounds.extend(marker.getLatLng());
     fitMap(bounds);
-    setStatus(`Imported ${file.name}. Check the interval, then press Generate path.`);
+    setStatus(t("Imported {file}. Check the interval, then press Generate path.", { file: file.name }));
   } catch (error) {
+    setStatus("");
     showFailure(error);
   }
 }
@@ -724,7 +556,13 @@ async function importAllFields(file) {
   form.append("file", file, file.name);
   try {
     const { created, reused } = await postForm(state.parseUrl.replace(/parse$/, "import"), form);
-    setStatus(`Added ${created} fields of ${file.name} to your fields (${reused} were there already).`);
+    setStatus(
+      t("Added {created} fields of {file} to your fields ({reused} were there already).", {
+        created,
+        file: file.name,
+        reused,
+      }),
+    );
     state.fields?.refresh();
   } catch (error) {
     showFailure(error);
@@ -732,8 +570,13 @@ async function importAllFields(file) {
 }
 
 function startOver() {
+  const drawn = state.field || state.markers.start || state.markers.finish;
+  if (drawn && !window.confirm(t("Start over? The field, the start and the finish are removed from the map (saved plans stay)."))) {
+    return;
+  }
   closeFieldChooser();
   endPlacing();
+  state.walker.end();
   clearError();
   state.map.pm.disableDraw();
   state.field?.remove();
@@ -741,7 +584,37 @@ function startOver() {
   placeMarker("start", null);
   placeMarker("finish", null);
   removePlan();
+  forget(KEYS.draft);
   setStatus("");
+}
+
+/** Put a field of the registry on the map, with its gates and name, ready to plan. */
+function loadRegistryField(field) {
+  endPlacing();
+  clearError();
+  state.map.pm.disableDraw();
+  const layer = fieldFromPolygon(field.boundary);
+  placeMarker("start", field.start);
+  placeMarker("finish", field.finish);
+  ui.planName.value = field.name;
+  saveDraft();
+  fitMap(layer.getBounds());
+  setStatus(t("{name}: check the interval, then press Generate path.", { name: field.name }));
+}
+
+/**
+ * Sign in (account.js); with no connection, go on without: the page and the draft work, and
+ * signing in happens when the network is back (before waiting saves are sent).
+ */
+async function ensureSignedIn(apiUrl) {
+  if (state.signedIn) return true;
+  try {
+    await signIn(apiUrl);
+    state.signedIn = true;
+  } catch (error) {
+    if (!(error instanceof TypeError)) throw error; // TypeError: fetch could not reach the server
+  }
+  return state.signedIn;
 }
 
 // ---------------------------------------------------------------- wiring
@@ -750,6 +623,7 @@ function wireControls() {
   ui.panelToggle.addEventListener("click", () =>
     setPanelOpen(ui.panelToggle.getAttribute("aria-expanded") !== "true"),
   );
+  ui.language.addEventListener("change", () => switchLanguage(ui.language.value));
   ui.drawField.addEventListener("click", startDrawing);
   ui.importField.addEventListener("click", () => ui.importFile.click());
   ui.importFile.addEventListener("change", () => {
@@ -759,9 +633,26 @@ function wireControls() {
   });
   ui.setStart.addEventListener("click", () => beginPlacing("start"));
   ui.setFinish.addEventListener("click", () => beginPlacing("finish"));
+  ui.gotoForm.addEventListener("submit", (event) => {
+    event.preventDefault();
+    clearError();
+    if (goToCoordinates(state.map, ui.goto.value)) {
+      ui.goto.removeAttribute("aria-invalid");
+      revealMapOnPhone();
+      setStatus(t("The map is at {position}.", { position: ui.goto.value.trim() }));
+    } else {
+      showError(t("Go to coordinates: “{typed}” is not a position. Type latitude and longitude in degrees, for example -8.6264, 115.2981.", { typed: ui.goto.value.trim() }));
+      ui.goto.setAttribute("aria-invalid", "true");
+      ui.goto.focus();
+    }
+  });
   ui.clearAll.addEventListener("click", startOver);
   ui.generate.addEventListener("click", () => generate());
   ui.save.addEventListener("click", () => generate({ save: true }));
+  for (const control of [ui.interval, ui.angle, ui.speed, ui.planName, ui.objective, ui.headland]) {
+    control.addEventListener("change", saveDraft);
+    control.addEventListener("input", saveDraft);
+  }
   // Enter in any text box plans, as a form would.
   for (const control of [ui.interval, ui.angle, ui.speed]) {
     control.addEventListener("keydown", (event) => {
@@ -780,48 +671,98 @@ function wireControls() {
   state.map.on("click", onMapClick);
 }
 
-/** Put a field of the registry on the map, with its gates and name, ready to plan. */
-function loadRegistryField(field) {
-  endPlacing();
-  clearError();
-  state.map.pm.disableDraw();
-  const layer = fieldFromPolygon(field.boundary);
-  placeMarker("start", field.start);
-  placeMarker("finish", field.finish);
-  ui.planName.value = field.name;
-  fitMap(layer.getBounds());
-  setStatus(`${field.name}: check the interval, then press Generate path.`);
-}
-
 async function main() {
   if (!window.L?.PM) {
-    ui.alert.textContent =
-      "The map library is missing on the server (run `npm ci`, or `make run`, which does it).";
+    document.getElementById("alert").textContent = t("The map library is missing on the server (run `npm ci`, or `make run`, which does it).");
     return;
   }
+  restoreLanguageChoice();
   const dataset = ui.app.dataset;
-  await signIn(dataset.apiUrl);
+  registerServiceWorker(dataset.serviceWorkerUrl); // first, so the page opens offline next time
+  await ensureSignedIn(dataset.apiUrl);
   state.api = new PlansApi(dataset.plansUrl);
+  closeFieldChooser();
   state.parseUrl = `${dataset.apiUrl.replace(/\/+$/, "")}/fields/parse`;
-  state.map = createMap(dataset);
-  setUpGeoman(state.map);
+  state.map = createMap(dataset, {
+    setStatus,
+    showError,
+    onWalk: () => state.walker.begin(),
+    onGoto: () => {
+      setPanelOpen(true);
+      ui.goto.scrollIntoView({ block: "center" });
+      ui.goto.focus();
+    },
+  });
+  state.walker = setUpWalkControls({
+    map: state.map,
+    beforeStart: () => {
+      endPlacing();
+      clearError();
+      state.map.pm.disableDraw();
+      revealMapOnPhone();
+    },
+    onField: (latlngs) => adoptField(L.polygon(latlngs, FIELD_STYLE).addTo(state.map), { replot: false }),
+    showError,
+    setStatus,
+  });
+  setUpGeoman(state.map, {
+    onCreate: (layer) => {
+      adoptField(layer, { replot: false });
+      checkSelfIntersection(layer);
+    },
+    onDrawEnd: () => setStatus(""),
+    onCut: (original, layer) => {
+      if (original === state.field) adoptField(layer, { replot: true });
+    },
+    onRemove: (layer) => {
+      if (layer === state.field) {
+        state.field = null;
+        removePlan();
+        saveDraft();
+      }
+    },
+  });
   state.checks = setUpChecks({
     map: state.map,
     api: new ChecksApi(dataset.apiUrl),
     setStatus,
     showFailure,
     clearError,
+    onResult: showResultOnPhone,
+  });
+  state.saved = setUpSavedPlans({
+    api: state.api,
+    onOpen: (id) => openPlan(id),
+    onDelete: deletePlan,
+    showFailure,
+    currentId: () => state.savedId,
   });
   state.fields = setUpFields({
     map: state.map,
     apiUrl: dataset.apiUrl,
     loadField: loadRegistryField,
-    onPlansChanged: () => refreshSavedPlans(),
+    onPlansChanged: () => state.saved.refresh(),
   });
   wireControls();
   setUpVehicle(dataset.apiUrl);
   setPanelOpen(false);
-  refreshSavedPlans();
+  restoreDraft();
+  if (state.signedIn) state.saved.refresh();
+  watchConnection({
+    api: state.api,
+    beforeFlush: () => ensureSignedIn(dataset.apiUrl),
+    onConnectionChange: updateNotice,
+    onFlushed: ({ sent, refused }) => {
+      updateNotice();
+      if (sent.length > 0) {
+        setStatus(tn("{count} plan saved offline has been sent.", "{count} plans saved offline have been sent.", sent.length, { count: sent.length }));
+      }
+      if (refused.length > 0) showFailure(refused[0].error);
+      state.saved.refresh();
+      state.fields?.refresh();
+    },
+  });
+  updateNotice();
   ui.app.dataset.ready = "true"; // tests wait for this before clicking the map
 }
 

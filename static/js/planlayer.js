@@ -3,6 +3,18 @@
 
 /* global L */
 
+import { t } from "./i18n.js";
+
+/** What each waypoint is, in words. */
+const ROLE_LABELS = {
+  start: t("start"),
+  line_start: t("start of a line"),
+  line_end: t("end of a line"),
+  turn: t("turn"),
+  headland: t("headland"),
+  finish: t("finish"),
+};
+
 /** Line styles per feature kind; bright colours so they read on satellite imagery. */
 const STYLES = {
   cell: { color: "#ffffff", weight: 1, dashArray: "4 4", opacity: 0.5, fillColor: "#ffffff", fillOpacity: 0.08 },
@@ -42,10 +54,12 @@ function waypointIcon(props) {
   });
 }
 
+/** "Waypoint 3: end of a line, line 0". Line numbers are the exports' (GPX, CSV), from 0. */
 function waypointTooltip(props) {
-  const role = String(props.role ?? "").replace("_", " ");
-  const line = props.line == null ? "" : `, line ${Number(props.line) + 1}`;
-  return `Waypoint ${Number(props.seq)}: ${role}${line}`;
+  const role = ROLE_LABELS[props.role] ?? String(props.role ?? "");
+  const seq = String(Number(props.seq));
+  if (props.line == null) return t("Waypoint {seq}: {role}", { seq, role });
+  return t("Waypoint {seq}: {role}, line {line}", { seq, role, line: String(Number(props.line)) });
 }
 
 function waypointLayer(geojson) {
@@ -68,14 +82,16 @@ function waypointLayer(geojson) {
   return { layer, renderer: canvas };
 }
 
+/**
+ * An arrow pointing `degrees` clockwise from screen east. The rotation is set through the DOM
+ * (CSSOM), not as a style="" attribute in the icon's HTML: the Content-Security-Policy
+ * (style-src 'self') drops inline style attributes, and every arrow then pointed east.
+ */
 function arrowMarker(latlng, degrees) {
+  const arrow = document.createElement("span");
+  arrow.style.transform = `rotate(${degrees.toFixed(1)}deg)`;
   return L.marker(latlng, {
-    icon: L.divIcon({
-      className: "path-arrow",
-      html: `<span style="transform: rotate(${degrees.toFixed(1)}deg)"></span>`,
-      iconSize: [18, 18],
-      iconAnchor: [9, 9],
-    }),
+    icon: L.divIcon({ className: "path-arrow", html: arrow, iconSize: [18, 18], iconAnchor: [9, 9] }),
     interactive: false,
     keyboard: false,
     pmIgnore: true,

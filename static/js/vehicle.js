@@ -3,15 +3,20 @@
 // come from the API (GET /api/vehicles); this module only shows them and puts the choice in
 // the request. No geometry here: the planner fits the turns.
 
+import { t } from "./i18n.js";
+
 const $ = (id) => document.getElementById(id);
 
-/** What the page calls each preset, in words a farmer knows. */
-const PRESET_NAMES = {
-  hand_tractor: "Hand tractor (walk-behind)",
-  paper_g1000: "Quick G1000 (the paper's figures)",
-  small_tractor: "Small four-wheel tractor",
-  rover: "Field robot (skid-steer)",
-};
+/** What the page calls each preset, in words a farmer knows (in the page's language). */
+function presetName(preset) {
+  const names = {
+    hand_tractor: t("Hand tractor (walk-behind)"),
+    paper_g1000: t("Quick G1000 (the paper's figures)"),
+    small_tractor: t("Small four-wheel tractor"),
+    rover: t("Field robot (skid-steer)"),
+  };
+  return names[preset] ?? preset;
+}
 
 const ui = {
   vehicle: null,
@@ -34,10 +39,15 @@ function describe(vehicle) {
   if (!vehicle) return "";
   const turning =
     vehicle.min_turn_radius_m > 0
-      ? `turns on a ${vehicle.min_turn_radius_m} m radius`
-      : `pivots about a wheel (${vehicle.track_m} m track)`;
-  const reverse = vehicle.can_reverse ? ", may reverse" : ", forward only";
-  return `${vehicle.width_m} m wide, ${vehicle.length_m} m long, ${turning}${reverse}.`;
+      ? t("turns on a {radius} m radius", { radius: vehicle.min_turn_radius_m })
+      : t("pivots about a wheel ({track} m track)", { track: vehicle.track_m });
+  const reverse = vehicle.can_reverse ? t("may reverse") : t("forward only");
+  return t("{width} m wide, {length} m long, {turning}, {reverse}.", {
+    width: vehicle.width_m,
+    length: vehicle.length_m,
+    turning,
+    reverse,
+  });
 }
 
 function showFigures() {
@@ -65,7 +75,7 @@ export async function setUpVehicle(apiUrl) {
       ...items.map((v) => {
         const option = document.createElement("option");
         option.value = v.preset;
-        option.textContent = PRESET_NAMES[v.preset] ?? v.preset;
+        option.textContent = presetName(v.preset);
         option.selected = v.preset === chosen;
         return option;
       }),
@@ -84,7 +94,9 @@ export function vehicleRequest() {
   const width = parseDecimal(ui.implement.value);
   if (Number.isNaN(width)) {
     return {
-      error: `Implement width (m): “${ui.implement.value.trim()}” is not a number. Leave it empty to use the interval.`,
+      error: t("Implement width (m): “{typed}” is not a number. Leave it empty to use the interval.", {
+        typed: ui.implement.value.trim(),
+      }),
       input: "implement_width_m",
     };
   }
@@ -100,9 +112,4 @@ export function fillVehicle(request) {
   ui.implement.value = request.implement_width_m ?? "";
   ui.pattern.value = request.pattern ?? "boustrophedon";
   showFigures();
-}
-
-/** The form controls of this module's inputs, to point at one the API refused. */
-export function vehicleControls() {
-  return { vehicle: ui.vehicle, implement_width_m: ui.implement, pattern: ui.pattern };
 }

@@ -52,6 +52,7 @@ class Objects:
     plan_id: int = 0
     simulation_id: int = 0
     run_id: int = 0
+    made_members: list[str] = field(default_factory=list)
 
     def new_field(self) -> int:
         response = self.owner.post(
@@ -68,6 +69,16 @@ class Objects:
 
     def _on(self) -> dict[str, Any]:
         return {"field_id": self.field_id, "name": SECRET_PLAN}
+
+    def new_member(self) -> int:
+        username = f"member{len(self.made_members)}"
+        response = self.owner.post(
+            "/api/members",
+            json={"username": username, "role": "viewer", "password": "a long password"},
+        )
+        assert response.status_code == 201, response.text
+        self.made_members.append(username)
+        return int(response.json()["user_id"])
 
     def new_token(self) -> int:
         response = self.owner.post("/api/tokens", json={"name": "to revoke"})
@@ -119,6 +130,10 @@ RULES: dict[tuple[str, str], Rule] = {
     ("GET", "/docs"): Rule("public", get("/docs")),
     ("GET", "/openapi.json"): Rule("public", get("/openapi.json")),
     ("GET", "/api/health"): Rule("public", get("/api/health")),
+    # The page's translations, manifest and service worker (issue 13): public, like the page.
+    ("GET", "/i18n/{lang}.json"): Rule("public", get("/i18n/id.json")),
+    ("GET", "/manifest.webmanifest"): Rule("public", get("/manifest.webmanifest")),
+    ("GET", "/sw.js"): Rule("public", get("/sw.js")),
     # Accounts.
     ("GET", "/api/auth/setup"): Rule("public", get("/api/auth/setup")),
     ("POST", "/api/auth/signup"): Rule(
@@ -155,6 +170,29 @@ RULES: dict[tuple[str, str], Rule] = {
         ok=204,
         # Only the token's user (or an owner, for device tokens) sees it.
         overrides={"viewer": 404, "planner": 404, "other": 404},
+    ),
+    # Members: owners only.
+    ("GET", "/api/members"): Rule("owner", get("/api/members")),
+    ("POST", "/api/members"): Rule(
+        "owner",
+        lambda o: ("POST", "/api/members", {"json": {"username": "viewer", "role": "viewer"}}),
+        ok=201,
+        # The other organisation's owner adds the user to their own organisation: allowed.
+    ),
+    ("PATCH", "/api/members/{user_id}"): Rule(
+        "owner",
+        lambda o: (
+            "PATCH",
+            f"/api/members/{o.workspace.users['viewer'].id}",
+            {"json": {"role": "viewer"}},
+        ),
+        item=True,
+    ),
+    ("DELETE", "/api/members/{user_id}"): Rule(
+        "owner",
+        lambda o: ("DELETE", f"/api/members/{o.new_member()}", {}),
+        ok=204,
+        item=True,
     ),
     # The field registry.
     ("GET", "/api/fields"): Rule("viewer", get("/api/fields")),
@@ -212,6 +250,9 @@ RULES: dict[tuple[str, str], Rule] = {
     # Runs: a device token may open a live run and post fixes.
     ("POST", "/api/plans/{plan_id}/runs"): Rule(
         "fixes", lambda o: ("POST", f"/api/plans/{o.plan_id}/runs", {}), ok=201, item=True
+    ),
+    ("GET", "/api/plans/{plan_id}/simulations"): Rule(
+        "viewer", get("/api/plans/{o.plan_id}/simulations"), item=True
     ),
     ("GET", "/api/plans/{plan_id}/runs"): Rule(
         "viewer", get("/api/plans/{o.plan_id}/runs"), item=True

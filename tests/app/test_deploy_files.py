@@ -14,8 +14,21 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def interpolate(value: str) -> str:
-    """Resolve Compose's ``${VAR:-default}`` with the defaults, as on a machine without .env."""
+    """Resolve Compose's ``${VAR:-default}`` with the defaults, as on a machine without .env.
+
+    A required variable (``${VAR:?message}``) becomes ``<VAR>``.
+    """
+    value = re.sub(r"\$\{([A-Z_]+):\?[^}]*\}", r"<\1>", value)
     return re.sub(r"\$\{[A-Z_]+:-([^}]*)\}", r"\1", value)
+
+
+def test_compose_has_no_default_password():
+    """Secrets come from the environment: Compose refuses to start without the password."""
+    text = (ROOT / "docker-compose.yml").read_text()
+    assert not re.search(r"PASSWORD:-", text)
+    assert "${POSTGRES_PASSWORD:?" in text
+    services = compose()["services"]
+    assert interpolate(services["db"]["environment"]["POSTGRES_PASSWORD"]) == "<POSTGRES_PASSWORD>"
 
 
 def compose() -> dict[str, Any]:

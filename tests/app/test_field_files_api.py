@@ -8,6 +8,7 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
+import shapely
 from starlette.testclient import TestClient
 
 from app.settings import Settings, get_settings
@@ -47,7 +48,12 @@ def test_a_google_earth_kmz_answers_its_field_and_plans(client: TestClient, tmp_
     assert response.status_code == 200, response.text
     (field,) = response.json()["features"]
     plan = client.post("/api/plans/preview", json={"field": field, "interval_m": 4})
-    assert plan.status_code == 200 and plan.json()["stats"]["line_count"] == 4
+    original = client.post(
+        "/api/plans/preview",
+        json={"field": json.loads(shapely.to_geojson(shared_polygon("paper"))), "interval_m": 4},
+    )
+    assert plan.status_code == 200 and original.status_code == 200
+    assert plan.json()["stats"]["line_count"] == original.json()["stats"]["line_count"]
 
 
 def test_hostile_and_unreadable_files_are_a_422_naming_the_file(client: TestClient) -> None:

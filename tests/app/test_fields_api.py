@@ -142,3 +142,22 @@ def test_another_organisation_sees_none_of_the_fields(
     plan = other_client.post("/api/plans", json={"field_id": field["id"], "interval_m": 4})
     assert plan.status_code == 404
     assert client.get(f"/api/fields/{field['id']}").json()["name"] == "Sawah Ketewel"
+
+
+def test_names_with_nul_are_422_not_a_database_error(
+    client: TestClient, paper_body: dict[str, Any], paper_geojson: dict[str, Any]
+):
+    # Found by schemathesis on PostgreSQL, whose text cannot hold NUL.
+    nul = "a\x00b"
+    answers = [
+        client.post("/api/fields", json={"name": nul, "boundary": paper_geojson}),
+        client.post("/api/fields", json={"name": "ok", "boundary": paper_geojson, "notes": nul}),
+        client.post("/api/plans", json={**paper_body, "name": nul}),
+        client.post("/api/tokens", json={"name": nul}),
+        client.post("/api/auth/login", json={"username": nul, "password": "x"}),
+    ]
+    assert [a.status_code for a in answers] == [422, 422, 422, 422, 401]
+    assert answers[0].json()["detail"] == "name: must not contain NUL characters"
+    plan = client.post("/api/plans", json=paper_body).json()
+    run = client.post(f"/api/plans/{plan['id']}/runs", data={"name": nul})
+    assert run.status_code == 422 and run.json()["detail"].startswith("name:")

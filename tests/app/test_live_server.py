@@ -179,6 +179,8 @@ def test_tillpath_serve_migrates_then_serves(tmp_path: Path):
     finally:
         process.terminate()
         process.wait(timeout=10)
+        said = process.stderr.read().decode() if process.stderr else ""
         if process.stderr:
             process.stderr.close()
     assert database.is_file()  # migrated into a directory that did not exist
+    assert f"no account yet: open http://127.0.0.1:{port}/ to create the first one" in said

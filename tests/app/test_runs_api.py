@@ -365,7 +365,7 @@ def test_deleting_the_plan_deletes_its_runs_and_fixes(
 
 def test_openapi_documents_simulation_and_run_routes(client: TestClient):
     paths = client.get("/openapi.json").json()["paths"]
-    assert set(paths["/api/plans/{plan_id}/simulations"]) == {"post"}
+    assert set(paths["/api/plans/{plan_id}/simulations"]) == {"get", "post"}
     assert set(paths["/api/simulations/{simulation_id}"]) == {"get"}
     assert set(paths["/api/simulations/{simulation_id}/export/gpx"]) == {"get"}
     assert set(paths["/api/plans/{plan_id}/runs"]) == {"get", "post"}

@@ -66,9 +66,8 @@ def open_context(
     browser: Browser, server_url: str, viewport: dict[str, int], **options: Any
 ) -> BrowserContext:
     """Return a fresh context (no storage) that only reaches ``server_url``."""
-    context = browser.new_context(
-        viewport=viewport, accept_downloads=True, locale="en-GB", **options
-    )
+    options.setdefault("locale", "en-GB")
+    context = browser.new_context(viewport=viewport, accept_downloads=True, **options)
     context.outside_requests = []  # type: ignore[attr-defined]
 
     def guard(route: Route) -> None:

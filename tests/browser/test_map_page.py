@@ -154,6 +154,14 @@ def test_saved_plan_opens_from_saved_plans_after_reload(page: Page) -> None:
     expect(gpx_link).to_have_attribute("href", re.compile(rf"/api/plans/{saved['id']}/export/gpx$"))
     page.reload()
     page.wait_for_selector("#app[data-ready='true']")
+    # The draft brings the stored plan back after the reload ...
+    expect(figure(page, "Lines")).to_have_text(str(saved["stats"]["line_count"]))
+    # ... and Start over (after asking) clears the map, not the saved plans.
+    page.once("dialog", lambda dialog: dialog.accept())
+    button(page, "Start over").click()
+    expect_no_plan(page)
+    page.reload()
+    page.wait_for_selector("#app[data-ready='true']")
     expect_no_plan(page)
 
     saved_plans = page.get_by_role("list", name="Saved plans")
@@ -186,7 +194,8 @@ def test_gpx_download_parses_and_validates_against_gpx_1_1(page: Page, tmp_path:
     assert len(gpx.routes) == 1
     points = gpx.routes[0].points
     assert len(points) == saved["stats"]["waypoint_count"]
-    assert sum(p.type != "turn" for p in points) == 10  # line ends, start and finish
+    # Line ends, start and finish; the hand tractor's pivots are "turn" points between them.
+    assert sum(p.type != "turn" for p in points) == 2 * saved["stats"]["line_count"] + 2
     assert (points[0].longitude, points[0].latitude) == pytest.approx(
         (saved["waypoints"][0]["lon"], saved["waypoints"][0]["lat"]), abs=1e-7
     )
@@ -223,17 +232,20 @@ def test_generate_without_a_field_says_what_to_do(page: Page) -> None:
     expect(page.get_by_role("alert")).to_contain_text("Draw field")
 
 
-def test_import_paper_field_gives_four_lines(page: Page) -> None:
+def test_import_paper_field_shows_its_plan_figures(page: Page) -> None:
     import_paper_field(page)
     expect(page.locator(".endpoint-start")).to_have_count(1)
     expect(page.locator(".endpoint-finish")).to_have_count(1)
 
     plan = generate(page)
 
-    expect(figure(page, "Lines")).to_have_text("4")
-    # Eight line ends, start and finish, and the hand tractor's pivots between the lines.
+    # The count follows the heading the search keeps (R5: coverage first), 4 or 5 lines.
+    lines = plan["stats"]["line_count"]
+    assert lines in (4, 5)
+    expect(figure(page, "Lines")).to_have_text(str(lines))
+    # Line ends, start and finish, and the hand tractor's pivots between the lines.
     expect(figure(page, "Waypoints")).to_have_text(str(plan["stats"]["waypoint_count"]))
-    assert sum(w["role"] != "turn" for w in plan["waypoints"]) == 10
+    assert sum(w["role"] != "turn" for w in plan["waypoints"]) == 2 * lines + 2
     expect(figure(page, "Area")).to_have_text(re.compile(r"^30[23]\.\d m²"))
     assert plan["request"]["start"] == pytest.approx([115.29797264, -8.62652248])
     assert plan["request"]["finish"] == pytest.approx([115.29816889, -8.62652064])
@@ -382,6 +394,8 @@ def test_format_helpers_use_human_units(page: Page) -> None:
                 f.friendlyError(422, "interval_m: must be between 0.2 and 50 m, got 0").message,
                 f.friendlyError(422, "field: polygon is self-intersecting near (1, 2)").input,
                 f.friendlyError(0, null).message,
+                f.friendlyError(422, "file: is not a track file tillpath can read: expected GPX")
+                    .message,
             ];
         }"""
     )
@@ -397,3 +411,16 @@ def test_format_helpers_use_human_units(page: Page) -> None:
     assert shown[7].startswith("Interval (m): must be between 0.2 and 50 m, got 0.")
     assert shown[8] == "field"
     assert "Cannot reach the tillpath server" in shown[9]
+    # A sentence, not "File: is not a track file".
+    assert shown[10].startswith("This file is not a track file tillpath can read: expected GPX.")
+
+
+def test_waypoint_tooltips_number_lines_as_the_exports_do(page: Page) -> None:
+    import_paper_field(page)
+    plan = generate(page)
+    first = plan["waypoints"][1]
+    assert first["role"] == "line_start"
+    page.locator(".waypoint").first.hover()
+    expect(page.locator(".leaflet-tooltip")).to_have_text(
+        f"Waypoint {first['seq']}: start of a line, line {first['line']}"
+    )

@@ -28,7 +28,7 @@ HUT_PX = [(200, 320), (300, 320), (300, 400), (200, 400)]
 
 
 def cut_hole(page: Page, corners: list[tuple[int, int]]) -> None:
-    page.get_by_role("button", name="Cut Layers").click()
+    page.get_by_role("button", name="Cut out a hole (pond, hut, tree)").click()
     for x, y in corners:
         click_map(page, x, y)
     click_map(page, *corners[0])

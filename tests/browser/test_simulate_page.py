@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import re
 import uuid
+from urllib.parse import urlsplit
 
 import pytest
 from playwright.sync_api import Page, expect
@@ -25,7 +26,10 @@ def test_simulate_draws_the_true_track_and_shows_its_metrics(page: Page) -> None
     plan = save(page, f"Simulate {uuid.uuid4().hex[:6]}")
     page.get_by_label("Guidance").select_option("line")
     with page.expect_response(
-        lambda r: r.request.method == "POST" and r.url.endswith(f"/plans/{plan['id']}/simulations")
+        lambda r: (
+            r.request.method == "POST"
+            and urlsplit(r.url).path.endswith(f"/plans/{plan['id']}/simulations")
+        )
     ) as answer:
         button(page, "Simulate").click()
     assert answer.value.status == 201, answer.value.text()
@@ -60,6 +64,9 @@ def test_simulate_draws_the_true_track_and_shows_its_metrics(page: Page) -> None
     (true,) = [f for f in simulation["tracks"]["features"] if f["properties"]["source"] == "true"]
     vertices = len(re.findall(r"[ML]", d))
     assert 10 <= vertices <= len(true["geometry"]["coordinates"])
+    # The page asked for the track thinned for drawing: fewer vertices than the stored one.
+    assert len(true["geometry"]["coordinates"]) < true["properties"]["stored_vertices"]
+    assert len(true["properties"]["time_s"]) == len(true["geometry"]["coordinates"])
     track_box = track.bounding_box()
     field_box = page.locator("path.leaflet-interactive").first.bounding_box()
     assert track_box is not None and field_box is not None

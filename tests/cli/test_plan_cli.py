@@ -23,7 +23,8 @@ def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]
 
 def test_plan_paper_field_as_gpx(tmp_path: Path) -> None:
     out = tmp_path / "plan.gpx"
-    result = run("plan", str(PAPER_FIELD), "--format", "gpx", "-o", str(out))
+    # Along the paper's rows (1°): the paper's 4 lines.
+    result = run("plan", str(PAPER_FIELD), "--angle", "1", "--format", "gpx", "-o", str(out))
     assert result.returncode == 0, result.stderr
     assert result.stdout == ""
     assert "4 lines" in result.stderr and "vehicle hand_tractor" in result.stderr
@@ -150,10 +151,36 @@ def test_plan_reads_a_vehicle_file_and_names_a_bad_field(tmp_path: Path) -> None
     assert "Traceback" not in result.stderr
 
 
-def test_plan_refuses_an_unknown_preset_and_spiral_for_now() -> None:
+def test_plan_refuses_an_unknown_preset() -> None:
     result = run("plan", str(PAPER_FIELD), "--vehicle", "tank")
     assert result.returncode == 2
     assert "error: vehicle: unknown preset 'tank'" in result.stderr
-    result = run("plan", str(PAPER_FIELD), "--pattern", "spiral")
+
+
+def test_plan_spiral_writes_rounds_as_one_path(tmp_path: Path) -> None:
+    out = tmp_path / "spiral.geojson"
+    result = run(
+        "plan",
+        str(PAPER_FIELD),
+        "--pattern",
+        "spiral",
+        "--vehicle",
+        "small_tractor",
+        "-o",
+        str(out),
+    )
+    assert result.returncode == 0, result.stderr
+    document = json.loads(out.read_text())
+    assert document["properties"]["vehicle"]["preset"] == "small_tractor"
+    features = document["features"]
+    kinds = [f["properties"]["kind"] for f in features]
+    assert kinds.count("round") >= 2
+    segments = [f for f in features if f["properties"]["kind"] in ("round", "turn", "transit")]
+    for before, after in zip(segments[:-1], segments[1:], strict=True):
+        assert before["geometry"]["coordinates"][-1] == after["geometry"]["coordinates"][0]
+
+
+def test_plan_unknown_pattern_fails_with_status_2() -> None:
+    result = run("plan", str(PAPER_FIELD), "--pattern", "zigzag")
     assert result.returncode == 2
-    assert result.stderr.startswith("error: pattern: spiral is not available yet")
+    assert "Traceback" not in result.stderr

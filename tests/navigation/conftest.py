@@ -73,13 +73,18 @@ def hand_plan(
 
 @pytest.fixture(scope="session")
 def paper_plan() -> CoveragePlan:
-    """The paper's scenario: Ketewel field, 4 m, with its start and finish."""
+    """The paper's scenario: Ketewel field, 4 m, with its start and finish, along its rows.
+
+    The paper's plan has 4 lines along the rows (1°); the searched heading puts coverage
+    first (R5) and may add a fifth line beside the last.
+    """
     spec = parse_field_geojson(json.loads(PAPER_FIELD.read_text(encoding="utf-8")))
     return plan_coverage(
         spec.field_lonlat,
         interval_m=4.0,
         start_lonlat=spec.start_lonlat,
         finish_lonlat=spec.finish_lonlat,
+        angle_deg=1.0,
     )
 
 

@@ -231,7 +231,8 @@ def test_google_earth_layout_with_style_maps_folders_and_altitudes_reads(tmp_pat
     (spec,) = read_fields(kml.encode(), filename="Sawah Ketewel.kml")
     assert spec.name == "Sawah Ketewel"
     assert spec.field_lonlat.equals(polygon)
-    assert plan_of(spec).stats.line_count == 4
+    # The same plan as the paper field's own polygon (whatever heading the search keeps).
+    assert_same_plan(plan_of(spec), plan_coverage(polygon, interval_m=4.0))
 
 
 def test_kml_multigeometry_of_two_polygons_is_two_fields() -> None:

@@ -16,11 +16,13 @@ from planner.errors import InvalidParameterError
 from planner.projection import field_frame
 from tests.conftest import field_from_local
 from tests.planner.plan_checks import (
+    TOLERANCE_M,
     assert_body_inside,
     assert_figures_add_up,
     assert_inside,
     assert_turns_drivable,
     line_offsets,
+    local_segments,
     reference_coverage,
 )
 from tests.planner.random_fields import fields_with_holes
@@ -166,11 +168,16 @@ def test_a_vehicle_wider_than_the_field_is_refused() -> None:
         )
 
 
-def test_spiral_is_refused_until_it_is_built() -> None:
-    with pytest.raises(InvalidParameterError, match="^pattern: spiral is not available yet"):
-        plan_coverage(
-            field_from_local([(0, 0), (40, 0), (40, 30), (0, 30)]), interval_m=4.0, pattern="spiral"
-        )
+def test_spiral_keeps_a_wide_body_inside_the_field() -> None:
+    """The spiral's rounds move inward when half the body is wider than half an interval."""
+    field = field_from_local([(0, 0), (40, 0), (40, 30), (0, 30)])
+    plan = plan_coverage(field, interval_m=1.0, pattern="spiral", vehicle="small_tractor")
+    assert plan.vehicle is not None and plan.vehicle.preset == "small_tractor"
+    frame = field_frame(plan.field_lonlat)
+    inside = frame.to_local(plan.field_lonlat).buffer(-plan.vehicle.width_m / 2.0 + TOLERANCE_M)
+    rounds = local_segments(plan, "round")
+    assert rounds
+    assert all(inside.covers(r) for r in rounds)
 
 
 @pytest.mark.slow

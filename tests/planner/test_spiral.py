@@ -1,0 +1,139 @@
+"""The spiral pattern: rounds inward, one continuous path, the core back and forth (issue 9)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from shapely import Polygon
+
+from planner import parse_field_geojson, plan_coverage
+from planner.export import plan_to_geojson
+from planner.projection import field_frame
+from planner.types import CoveragePlan
+from tests.conftest import field_from_local
+from tests.planner.plan_checks import TINY_VEHICLE, TOLERANCE_M, local_segments
+from tests.planner.random_fields import fields_with_holes
+
+SETTINGS = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def assert_inside_and_continuous(plan: CoveragePlan) -> None:
+    """R1 for rounds, lines and turns; each segment begins where the one before it ends."""
+    field_local = field_frame(plan.field_lonlat).to_local(plan.field_lonlat)
+    grown = field_local.buffer(TOLERANCE_M)
+    for kind in ("round", "line", "turn"):
+        for segment in local_segments(plan, kind):
+            assert grown.covers(segment), f"{kind} leaves the field"
+    for before, after in zip(plan.segments[:-1], plan.segments[1:], strict=True):
+        assert before.lonlat[-1] == after.lonlat[0], "the path is not continuous"
+    path = [(w.lon, w.lat) for w in plan.waypoints]
+    joined = [p for s in plan.segments for p in s.lonlat]
+    assert set(joined) <= set(path)
+
+
+def spiral_coverage(plan: CoveragePlan) -> float:
+    """R4 with shapely: rounds (mitre joins) and lines buffered by d/2, flat caps."""
+    field_local = field_frame(plan.field_lonlat).to_local(plan.field_lonlat)
+    half = plan.interval_m / 2
+    pieces = [line.buffer(half, cap_style="flat") for line in local_segments(plan, "line")]
+    pieces += [
+        r.buffer(half, cap_style="flat", join_style="mitre") for r in local_segments(plan, "round")
+    ]
+    if not pieces:
+        return 0.0
+    covered = shapely.intersection(field_local, shapely.union_all(pieces))
+    return float(covered.area / field_local.area)
+
+
+def test_paper_field_at_4_m_is_one_spiral_covering_97_percent(paper_geojson: dict) -> None:
+    spec = parse_field_geojson(paper_geojson)
+    plan = plan_coverage(
+        spec.field_lonlat,
+        interval_m=4.0,
+        start_lonlat=spec.start_lonlat,
+        finish_lonlat=spec.finish_lonlat,
+        pattern="spiral",
+    )
+    assert_inside_and_continuous(plan)
+    rounds = [s for s in plan.segments if s.kind == "round"]
+    assert len(rounds) >= 2
+    assert [s.index for s in rounds] == list(range(len(rounds)))
+    assert spiral_coverage(plan) >= 0.95
+    assert plan.stats.coverage_ratio >= 0.97
+    assert plan.waypoints[0].role == "start"
+    assert plan.waypoints[-1].role == "finish"
+
+
+def test_geojson_writes_rounds_with_their_index(paper_geojson: dict) -> None:
+    spec = parse_field_geojson(paper_geojson)
+    plan = plan_coverage(spec.field_lonlat, interval_m=4.0, pattern="spiral")
+    features = json.loads(json.dumps(plan_to_geojson(plan)))["features"]
+    rounds = [f["properties"] for f in features if f["properties"]["kind"] == "round"]
+    assert rounds and [r["index"] for r in rounds] == list(range(len(rounds)))
+
+
+def test_round_hole_is_circled_and_the_core_filled(field_with_hole: Polygon) -> None:
+    frame = field_frame(field_with_hole)
+    local = frame.to_local(field_with_hole)
+    x0, y0, x1, y1 = local.bounds
+    pond = shapely.Point((x0 + x1) / 2, (y0 + y1) / 2).buffer(min(x1 - x0, y1 - y0) / 8)
+    field = frame.to_lonlat(Polygon(local.exterior, [pond.exterior]))
+    plan = plan_coverage(field, interval_m=2.0, pattern="spiral")
+    assert_inside_and_continuous(plan)
+    rounds = local_segments(plan, "round")
+    around_pond = [r for r in rounds if Polygon(r).contains(pond)]
+    assert around_pond, "no round goes round the pond"
+    assert abs(spiral_coverage(plan) - plan.stats.coverage_ratio) < 0.02
+
+
+@SETTINGS
+@given(field=fields_with_holes(max_vertices=20, max_holes=2), frac=st.floats(0.03, 0.12))
+def test_random_fields_with_holes_give_one_continuous_path_inside(
+    field: Polygon, frac: float
+) -> None:
+    interval = float(np.clip(frac * math.sqrt(field.area), 0.2, 50.0))
+    plan = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
+    )
+    assert_inside_and_continuous(plan)
+    again = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
+    )
+    assert again.waypoints == plan.waypoints  # R7
+    assert plan.stats.coverage_ratio <= spiral_coverage(plan) + 1e-4
+
+
+@SETTINGS
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 12),
+    aspect=st.floats(0.3, 1.0),
+    frac=st.floats(0.02, 0.1),
+)
+def test_convex_fields_are_covered_95_percent(
+    seed: int, n: int, aspect: float, frac: float
+) -> None:
+    rng = np.random.default_rng(seed)
+    hull = shapely.MultiPoint(rng.uniform(-1, 1, (n, 2)) * [100.0, 100.0 * aspect]).convex_hull
+    if hull.geom_type != "Polygon" or hull.area < 100.0:
+        hull = shapely.box(0, 0, 80, 50)
+    interval = float(np.clip(frac * math.sqrt(hull.area), 0.2, 50.0))
+    plan = plan_coverage(
+        field_from_local(hull), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
+    )
+    assert_inside_and_continuous(plan)
+    assert spiral_coverage(plan) >= 0.95
+
+
+def test_unknown_pattern_is_refused_by_name(square_field: Polygon) -> None:
+    try:
+        plan_coverage(square_field, interval_m=4.0, pattern="zigzag")
+    except ValueError as error:
+        assert str(error).startswith("pattern:")
+    else:
+        raise AssertionError("an unknown pattern was accepted")
