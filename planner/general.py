@@ -714,7 +714,9 @@ def add_fitted_lines(
     if n == 0:
         return
     offsets = fit.turns.offsets
-    inner = np.diff(offsets) - 2 if n > 1 else np.zeros(0, dtype=np.int64)
+    # A turn's curve holds its two ends and the points between; a degenerate curve of one
+    # point (the next line starts where this one ends) has none between.
+    inner = np.maximum(np.diff(offsets) - 2, 0) if n > 1 else np.zeros(0, dtype=np.int64)
     # Driving order: s0 e0 (turn 0) s1 e1 (turn 1) … as blocks of 2 + inner points.
     sizes = np.full(n, 2, dtype=np.int64)
     sizes[:-1] += inner
