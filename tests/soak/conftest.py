@@ -23,6 +23,9 @@ from tests.databases import DATABASES, scratch_pg_database
 SOAK_S = float(os.environ.get("TILLPATH_SOAK_S", "3"))
 #: The long version (``make soak``): every worker count, every schemathesis phase, bigger logs.
 LONG = SOAK_S >= 30
+#: The long schemathesis run (every phase) is collected by ``make soak`` only: in ``make test``,
+#: tests/app/test_schemathesis.py runs schemathesis over every operation on both databases.
+collect_ignore = [] if LONG else ["test_schemathesis.py"]
 #: Concurrent clients of the mixed load.
 SOAK_THREADS = int(os.environ.get("TILLPATH_SOAK_THREADS", "6" if LONG else "3"))
 

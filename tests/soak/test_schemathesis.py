@@ -17,14 +17,8 @@ from pathlib import Path
 import pytest
 
 from app.testing import ServerProcess
-from tests.soak.conftest import LONG
 
-pytestmark = [
-    pytest.mark.soak,
-    pytest.mark.skipif(
-        not LONG, reason="make soak only: tests/app/test_schemathesis.py covers the short run"
-    ),
-]
+pytestmark = pytest.mark.soak
 
 MAX_EXAMPLES = 50
 PHASES = "examples,coverage,fuzzing,stateful"
