@@ -12,6 +12,7 @@ from app.auth import Planner, Viewer
 from app.capacity import HeavyWorkDep
 from app.db import SessionDep, copy_row, delete_row, end_reads, write
 from app.models import Plan
+from app.routers.downloads import download
 from app.schemas import ErrorRead, ExportFormat, PlanCreate, PlanList, PlanRead
 from app.settings import Settings, get_settings
 
@@ -136,8 +137,4 @@ def export_plan(
 ) -> Response:
     """Download a stored plan as GPX, GeoJSON, CSV or waypoints JSON."""
     export = services.export_plan(services.read_plan(session, plan_id, access), fmt)
-    return Response(
-        content=export.content,
-        media_type=export.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
-    )
+    return download(export)

@@ -12,6 +12,7 @@ from app.capacity import HeavyWorkDep
 from app.db import SessionDep, end_reads
 from app.errors import UploadTooLargeError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan
+from app.routers.downloads import download
 from app.schemas import ErrorRead, FixesAdded, FixIn, PlanRead, RunList, RunRead
 from app.settings import Settings, get_settings
 from app.tracks import MAX_TIME_TEXT, check_text, parse_time, read_track
@@ -193,11 +194,7 @@ def create_follow_up(
 def export_run_gpx(run_id: int, session: SessionDep, access: Viewer) -> Response:
     """Download a run as GPX: its fixes as a timed track, the plan as a route."""
     export = runs.export_run_gpx(session, runs.read_run(session, run_id, access))
-    return Response(
-        content=export.content,
-        media_type=export.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
-    )
+    return download(export)
 
 
 @router.get(
@@ -216,8 +213,4 @@ def export_run_gpx(run_id: int, session: SessionDep, access: Viewer) -> Response
 def export_run_kml(run_id: int, session: SessionDep, access: Viewer) -> Response:
     """Download a run as KML for Google Earth: its fixes as a ``gx:Track``, the plan with it."""
     export = runs.export_run_track(session, runs.read_run(session, run_id, access), "kml")
-    return Response(
-        content=export.content,
-        media_type=export.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
-    )
+    return download(export)

@@ -14,6 +14,7 @@ from app.jobs import get_jobs, submit_job
 from app.jobs.schemas import JobRead
 from app.jobs.simulations import simulation_params
 from app.models import Job, Simulation, utc_now
+from app.routers.downloads import download
 from app.schemas import (
     ErrorRead,
     SimulationCreate,
@@ -117,11 +118,7 @@ def export_simulation_gpx(simulation_id: int, session: SessionDep, access: Viewe
     """Download a simulation as GPX: the plan as a route, true/estimated/GPS tracks as tracks."""
     simulation = services.read_simulation(session, simulation_id, access)
     export = services.export_simulation_gpx(session, simulation, access)
-    return Response(
-        content=export.content,
-        media_type=export.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
-    )
+    return download(export)
 
 
 @router.get(
@@ -140,8 +137,4 @@ def export_simulation_kml(simulation_id: int, session: SessionDep, access: Viewe
     """Download a simulation as KML: the plan, true/estimated/GPS tracks as ``gx:Track``."""
     simulation = services.read_simulation(session, simulation_id, access)
     export = services.export_simulation(session, simulation, access, "kml")
-    return Response(
-        content=export.content,
-        media_type=export.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{export.filename}"'},
-    )
+    return download(export)
