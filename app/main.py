@@ -24,6 +24,7 @@ from app.routers import (
     plans,
     runs,
     simulations,
+    vehicles,
 )
 from app.security import SecurityHeadersMiddleware, content_security_policy
 from app.settings import Settings, get_settings
@@ -85,6 +86,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router, prefix=API_PREFIX)
     app.include_router(auth.router, prefix=API_PREFIX)
     app.include_router(fields.router, prefix=API_PREFIX)
+    app.include_router(vehicles.router, prefix=API_PREFIX)
     app.include_router(members.router, prefix=API_PREFIX)
     register_error_handlers(app)
     app.add_middleware(

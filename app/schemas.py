@@ -35,6 +35,33 @@ MAX_PAGE_SIZE = 200
 Position = tuple[float, float]
 
 
+class VehicleSpec(BaseModel):
+    """A vehicle as an object: a preset and the figures that differ from it (product.md §3a).
+
+    Ranges are the planner's to check, so that every entry point gives the same message.
+    """
+
+    # Unknown fields pass through to the planner, which names them (same words as the CLI).
+    model_config = ConfigDict(extra="allow", allow_inf_nan=False)
+
+    preset: str = Field(
+        default="hand_tractor",
+        description="hand_tractor, paper_g1000, small_tractor or rover.",
+    )
+    width_m: float | None = Field(default=None, description="Body width, implement included [m].")
+    length_m: float | None = Field(default=None, description="Body length [m].")
+    track_m: float | None = Field(default=None, description="Distance between the wheels [m].")
+    min_turn_radius_m: float | None = Field(
+        default=None, description="Smallest turning radius [m]; 0: pivots about a wheel."
+    )
+    can_reverse: bool | None = Field(default=None, description="Whether turns may reverse.")
+    turn_rate_dps: float | None = Field(default=None, description="Yaw rate turning [°/s].")
+
+    def overrides(self) -> dict[str, Any]:
+        """Return the preset and the fields that were given, for the planner."""
+        return self.model_dump(exclude_none=True)
+
+
 def _no_nul(value: str) -> str:
     """Refuse NUL characters: PostgreSQL text cannot hold them (it would be a 500)."""
     if "\x00" in value:
@@ -108,10 +135,26 @@ class PlanCreate(BaseModel):
     objective: Objective = "shortest_path"
     headland_passes: int = Field(default=0, description="Passes around the boundary, 0–5.")
     speed_mps: float = Field(default=0.56, description="Working speed [m/s], 0.05–10.")
+    implement_width_m: float | None = Field(
+        default=None,
+        description=(
+            "Working width of the implement [m], 0.1–50: what one pass tills; coverage is "
+            "measured with it. Default: `interval_m`."
+        ),
+    )
+    vehicle: str | VehicleSpec = Field(
+        default="hand_tractor",
+        description=(
+            "The machine that drives the path: a preset name (hand_tractor, paper_g1000, "
+            "small_tractor, rover) or an object whose fields override its preset "
+            "(product.md §3a)."
+        ),
+        examples=["hand_tractor", {"preset": "small_tractor", "min_turn_radius_m": 4.0}],
+    )
     pattern: Pattern = Field(
         default="boustrophedon",
-        description="boustrophedon (lines back and forth) or spiral (rounds inward, the core "
-        "back and forth); snake is not available yet.",
+        description="boustrophedon (lines back and forth), snake (skipping lines so that "
+        "turns need no loops) or spiral (rounds inward, the core back and forth).",
     )
 
 
@@ -131,6 +174,9 @@ class PlanStatsRead(BaseModel):
     angle_deg: float
     estimated_time_s: float
     planning_ms: float
+    implement_width_m: float | None = None
+    overlap_m: float | None = None
+    vehicle: dict[str, Any] | None = None
     coverage_given_up_pp: float = Field(
         0.0, description="How far below the best heading's coverage the plan is, in points"
     )

@@ -117,6 +117,8 @@ def plan_field(body: PlanCreate, *, budget_s: float = DEFAULT_PLANNING_BUDGET_S)
         objective=body.objective,
         headland_passes=body.headland_passes,
         speed_mps=body.speed_mps,
+        implement_width_m=body.implement_width_m,
+        vehicle=_vehicle_spec(body),
         pattern=body.pattern,
     )
     name = (body.name or "").strip() or (spec.name or "").strip() or None
@@ -136,6 +138,8 @@ def plan_field(body: PlanCreate, *, budget_s: float = DEFAULT_PLANNING_BUDGET_S)
         "objective": body.objective,
         "headland_passes": body.headland_passes,
         "speed_mps": body.speed_mps,
+        "implement_width_m": body.implement_width_m,
+        "vehicle": _vehicle_spec(body),
         "pattern": body.pattern,
     }
     return Plan(
@@ -260,7 +264,12 @@ def coverage_plan_from_row(plan: Plan) -> CoveragePlan:
     """
     stats_fields = {f.name for f in dataclasses.fields(PlanStats)}
     stats = PlanStats(**{k: v for k, v in plan.stats.items() if k in stats_fields})
-    return dataclasses.replace(plan_from_geojson(plan.geojson), stats=stats)
+    restored = plan_from_geojson(plan.geojson)
+    vehicle = restored.vehicle
+    if vehicle is None and isinstance(stats.vehicle, dict):
+        vehicle = planner.resolve_vehicle(None)
+        vehicle = dataclasses.replace(vehicle, **stats.vehicle)
+    return dataclasses.replace(restored, stats=stats, vehicle=vehicle)
 
 
 def polygon_to_geojson(polygon: Polygon) -> dict[str, Any]:
@@ -401,6 +410,13 @@ def json_ready(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [json_ready(v) for v in value]
     return value
+
+
+def _vehicle_spec(body: PlanCreate) -> str | dict[str, Any]:
+    """Return the request's vehicle as the planner takes it: a preset name or overrides."""
+    if isinstance(body.vehicle, str):
+        return body.vehicle
+    return body.vehicle.overrides()
 
 
 def _position(value: tuple[float, float] | None, name: str) -> tuple[float, float] | None:

@@ -1,4 +1,5 @@
-"""Planner budgets (product.md §11): the paper field ≤ 2 ms, a 100 ha convex field ≤ 25 ms.
+"""Planner budgets (product.md §11): the paper field ≤ 2 ms, a 100 ha convex field ≤ 25 ms
+(both with the default vehicle, the hand tractor), and ≤ 50 ms with ``small_tractor``.
 
 And three pathological fields (issue 9), each ≤ 2 s: a 1,999-vertex wavy boundary, a field
 with 50 holes and a 1,998-vertex comb.
@@ -90,9 +91,13 @@ def run() -> str:
     big_plan = plan_coverage(big, interval_m=1.0)
     paper_ms = summary_ms(time_calls(paper, repeat=500))
     big_ms = summary_ms(time_calls(lambda: plan_coverage(big, interval_m=1.0), repeat=60))
+    small_plan = plan_coverage(big, interval_m=1.0, vehicle="small_tractor")
+    small_ms = summary_ms(
+        time_calls(lambda: plan_coverage(big, interval_m=1.0, vehicle="small_tractor"), repeat=40)
+    )
     rows = [
         (
-            "Paper field (4 m, start + finish), projection and GeoJSON included",
+            "Paper field (4 m, start + finish, hand tractor), projection and GeoJSON included",
             paper_ms,
             2.0,
             f"{paper_plan.stats.line_count} lines",
@@ -103,6 +108,12 @@ def run() -> str:
             big_ms,
             25.0,
             f"{big_plan.stats.line_count} lines",
+        ),
+        (
+            "100 ha convex field at 1 m with `small_tractor` (curved turns inside)",
+            small_ms,
+            50.0,
+            f"{small_plan.stats.line_count} lines",
         ),
     ]
     lines = [

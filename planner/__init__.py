@@ -17,17 +17,23 @@ from planner.projection import LocalFrame, field_frame, local_frame
 from planner.types import (
     DEFAULT_SPEED_MPS,
     OBJECTIVES,
+    PATTERNS,
     CoveragePlan,
     Machine,
     Objective,
     PathSegment,
+    Pattern,
     PlanStats,
+    Vehicle,
     Waypoint,
 )
+from planner.vehicles import PRESETS, resolve_vehicle
 
 __all__ = [
     "DEFAULT_SPEED_MPS",
     "OBJECTIVES",
+    "PATTERNS",
+    "PRESETS",
     "CoveragePlan",
     "FieldSpec",
     "InvalidFieldError",
@@ -36,13 +42,16 @@ __all__ = [
     "Machine",
     "Objective",
     "PathSegment",
+    "Pattern",
     "PlanStats",
     "PlanTooLargeError",
     "PlannerError",
+    "Vehicle",
     "Waypoint",
     "field_frame",
     "local_frame",
     "parse_field_geojson",
     "parse_position",
     "plan_coverage",
+    "resolve_vehicle",
 ]

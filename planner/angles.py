@@ -154,12 +154,17 @@ class HeadingChoice:
         Its coverage, as the scorer gave it.
     coverage_given_up_pp : float
         How far below the best candidate's coverage it is, in percentage points (≥ 0).
+    alternatives : tuple of (float, int)
+        Other (heading, variant) pairs worth planning in full when the scorer's coverage is
+        not the plan's (a vehicle's pulled-back line ends): the best-covering scored
+        headings, at least :data:`_SEED_GAP_DEG` apart, best first.
     """
 
     heading_deg: float
     variant: int
     coverage_ratio: float
     coverage_given_up_pp: float
+    alternatives: tuple[tuple[float, int], ...] = ()
 
 
 def coverage_eligible(coverage: FloatArray) -> npt.NDArray[np.bool_]:
@@ -271,8 +276,37 @@ def search_headings(
             if not moved:
                 break
             centres = np.array([chosen[0]])  # re-centre on a refined winner
+        alternatives = _best_covering(pool, objective, chosen[0])
+    else:
+        alternatives = _best_covering(
+            _Pool(headings, lengths, counts, coverage), objective, chosen[0]
+        )
     given_up = max(best_coverage - chosen[2], 0.0) * 100.0
-    return HeadingChoice(chosen[0], chosen[1], chosen[2], given_up)
+    return HeadingChoice(chosen[0], chosen[1], chosen[2], given_up, alternatives)
+
+
+#: Alternatives :func:`search_headings` offers for a re-check with the plan's own coverage.
+ALTERNATIVES = 3
+
+
+def _best_covering(
+    pool: _Pool, objective: Objective, chosen_deg: float
+) -> tuple[tuple[float, int], ...]:
+    """Return the best-covering scored headings, a seed gap apart, each with its best variant."""
+    coverage = np.where(
+        (pool.counts <= MAX_LINES) & np.isfinite(pool.coverage), pool.coverage, -np.inf
+    )
+    total = np.round(pool.lengths.total / _TIE_M) * _TIE_M
+    picked: list[int] = []
+    for i in np.lexsort(
+        (pool.headings, _objective_key(pool.lengths, pool.counts, objective), -coverage)
+    ).tolist():
+        if not np.isfinite(coverage[i]) or len(picked) == ALTERNATIVES:
+            break
+        gap = np.abs((pool.headings[picked] - pool.headings[i] + 90.0) % 180.0 - 90.0)
+        if not picked or gap.min() >= _SEED_GAP_DEG:
+            picked.append(i)
+    return tuple((float(pool.headings[i]), int(np.argmin(total[i]))) for i in picked)
 
 
 @dataclass(frozen=True, slots=True)

@@ -90,7 +90,8 @@ def covered_area(
     u, v_lo, v_hi : ndarray, shape (n,)
         Its lines, left to right, as :func:`planner.lines.scan_cell` places them.
     interval_m : float
-        Footprint width [m].
+        Footprint width [m]: the implement's working width (R4), which may be wider or
+        narrower than the spacing of the lines.
 
     Returns
     -------
@@ -110,6 +111,9 @@ def covered_area(
     if n == 0:
         return 0.0
     s0, s1 = u - half, u + half
+    if n > 2 and bool((np.diff(u)[:-1] < d - _TIE_M).any()):
+        # An implement wider than the interval: every footprint overlaps its neighbours.
+        return _covered_overlapping(chains, u, v_lo, v_hi, d)
     if n == 1 or u[n - 1] - u[n - 2] >= d:
         return _covered(chains, s0, s1, v_lo, v_hi)
     # The last line sits nearer its neighbour (R2), so their strips overlap on
@@ -127,6 +131,35 @@ def covered_area(
     last = _covered(chains, s0[n - 1 :], s1[n - 1 :], v_lo[n - 1 :], v_hi[n - 1 :])
     overlap = _covered(chains, s0[n - 1 :], s1[n - 2 : n - 1], [max(a2)], [min(b2)])
     return first + last - overlap
+
+
+def _covered_overlapping(
+    chains: Chains, u: FloatArray, v_lo: FloatArray, v_hi: FloatArray, width_m: float
+) -> float:
+    """Covered area when footprints overlap their neighbours (implement wider than interval).
+
+    Cut the sweep where any footprint begins or ends; in each piece the footprints over it
+    overlap along the lines, so their union is one interval from the lowest start to the
+    highest end.
+    """
+    order = np.argsort(u, kind="stable")
+    u, v_lo, v_hi = u[order], v_lo[order], v_hi[order]
+    half = width_m / 2.0
+    s0, s1 = u - half, u + half
+    cuts = np.unique(np.concatenate([s0, s1]))
+    left, right = cuts[:-1], cuts[1:]
+    mid = (left + right) / 2.0
+    first = np.searchsorted(s1, mid, side="right")  # first footprint ending after mid
+    last = np.searchsorted(s0, mid, side="right") - 1  # last one starting before it
+    covered = last >= first
+    left, right, first, last = left[covered], right[covered], first[covered], last[covered]
+    low = v_lo[first].copy()
+    high = v_hi[first].copy()
+    for step in range(1, int((last - first).max(initial=0)) + 1):
+        k = np.minimum(first + step, last)
+        low = np.minimum(low, v_lo[k])
+        high = np.maximum(high, v_hi[k])
+    return _covered(chains, left, right, low, high)
 
 
 def cell_area(chains: Chains) -> float:

@@ -16,16 +16,21 @@ from planner.errors import InvalidParameterError
 _SLIVER_M2 = 1e-6
 
 
-def inner_parts(field_local: Polygon, *, passes: int, interval_m: float) -> list[Polygon]:
+def inner_parts(
+    field_local: Polygon, *, passes: int, interval_m: float, vehicle_width_m: float = 0.0
+) -> list[Polygon]:
     """Return the area left for tillage lines inside ``passes`` headland rounds.
 
+    With no passes it is the machine area: the field eroded by half the vehicle's width (R1).
     A narrow neck can split it into several parts; they come oriented (exterior
     counter-clockwise), largest first.
     """
+    half = vehicle_width_m / 2.0
     if passes == 0:
-        inner = field_local
+        inner = field_local.buffer(-half) if half > 0.0 else field_local
     else:
-        inner = field_local.buffer(-passes * interval_m, join_style="mitre")
+        depth = first_pass_offset_m(interval_m, vehicle_width_m) + (passes - 0.5) * interval_m
+        inner = field_local.buffer(-max(depth, half), join_style="mitre")
     parts = [
         shapely.orient_polygons(p)
         for p in shapely.get_parts(inner)
@@ -35,14 +40,33 @@ def inner_parts(field_local: Polygon, *, passes: int, interval_m: float) -> list
     return parts
 
 
+def first_pass_offset_m(interval_m: float, vehicle_width_m: float) -> float:
+    """How far inside the boundary the outermost headland pass runs [m].
+
+    Half the interval (its footprint then touches the bund), or half the vehicle's width
+    if that is more (the body stays in, R1).
+    """
+    return max(interval_m, vehicle_width_m) / 2.0
+
+
 def headland_ring_sets(
-    field_local: Polygon, *, passes: int, interval_m: float
+    field_local: Polygon,
+    *,
+    passes: int,
+    interval_m: float,
+    vehicle_width_m: float = 0.0,
+    turning_radius_m: float = 0.0,
 ) -> list[list[LinearRing]]:
     """Centre lines of the headland passes, outermost pass first: each pass's rings.
 
-    Pass ``i`` runs ``(i + 1/2) · interval_m`` inside the boundary, around the exterior and
-    around every hole (grown by the same distance), so its footprint fills the band from
-    ``i · interval_m`` to ``(i + 1) · interval_m``.
+    Pass ``i`` runs ``first_pass_offset_m + i · interval_m`` inside the boundary, around the
+    exterior and around every hole (grown by the same distance), so its footprint fills the
+    band from ``i · interval_m`` to ``(i + 1) · interval_m`` (further in if the vehicle is
+    wider than the interval). With a turning radius ``r`` every corner is rounded so that
+    the vehicle can drive it: the ring bounds ``(field ⊖ a) ⊕ r`` with
+    ``a = max(offset + r, 2r)``: its straight runs lie ``a - r`` inside, its convex corners
+    are arcs of radius ``r`` and its reflex corners arcs of radius ``a - r ≥ r`` (so a pass
+    nearer the boundary than ``r`` moves in to ``r``).
 
     Raises
     ------
@@ -51,8 +75,14 @@ def headland_ring_sets(
         then the plan is the passes alone).
     """
     sets: list[list[LinearRing]] = []
+    first = first_pass_offset_m(interval_m, vehicle_width_m)
+    r = float(turning_radius_m)
     for i in range(passes):
-        offset = field_local.buffer(-(i + 0.5) * interval_m, join_style="mitre")
+        depth = first + i * interval_m
+        if r > 0.0:
+            offset = field_local.buffer(-max(depth + r, 2.0 * r)).buffer(r)
+        else:
+            offset = field_local.buffer(-depth, join_style="mitre")
         rings = [
             ring
             for p in shapely.get_parts(offset)

@@ -150,7 +150,9 @@ def scan_cell(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float) 
     )
 
 
-def scan_cells(rings: list[tuple[FloatArray, FloatArray]], interval_m: float) -> LineScan:
+def scan_cells(
+    rings: list[tuple[FloatArray, FloatArray]], interval_m: float, *, edge_m: float | None = None
+) -> LineScan:
     """Place the lines of many sweep-monotone cells at once, as one ragged array.
 
     Each line takes its ends from the lower-chain edge (``u`` increasing along the
@@ -163,6 +165,10 @@ def scan_cells(rings: list[tuple[FloatArray, FloatArray]], interval_m: float) ->
     rings : list of (ndarray, ndarray)
         Each cell's exterior ``(u, v)`` in the sweep frame, counter-clockwise, not closed [m].
     interval_m : float
+    edge_m : float, optional
+        How far inside each cell's ends the outermost lines lie [m]; ``interval_m / 2`` (R3)
+        by default. A cell of the machine area (the field eroded by half the vehicle) takes
+        less, so that its lines still lie half an interval inside the field.
 
     Returns
     -------
@@ -188,14 +194,15 @@ def scan_cells(rings: list[tuple[FloatArray, FloatArray]], interval_m: float) ->
     starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
     u_min = np.minimum.reduceat(u1, starts)
     u_max = np.maximum.reduceat(u1, starts)
+    edge = d / 2.0 if edge_m is None else float(edge_m)
     width = u_max - u_min
-    n = line_counts(width, d)
+    n = line_counts(width - 2.0 * edge + d, d)
     offsets = np.concatenate(([0], np.cumsum(n))).astype(np.int64)
     c_of_line = np.repeat(np.arange(len(rings)), n)
     k = np.arange(offsets[-1]) - offsets[c_of_line]
-    narrow = width <= d
-    first = np.where(narrow, (u_min + u_max) / 2.0, u_min + d / 2.0)
-    last = np.where(narrow, first, u_max - d / 2.0)
+    narrow = width - 2.0 * edge <= 0.0
+    first = np.where(narrow, (u_min + u_max) / 2.0, u_min + edge)
+    last = np.where(narrow, first, u_max - edge)
     u = np.where(k == n[c_of_line] - 1, last[c_of_line], first[c_of_line] + k * d)
     v_lo = np.empty_like(u)
     v_hi = np.empty_like(u)

@@ -328,3 +328,62 @@ def ordered_line_ends(
     up = (np.arange(n) % 2 == 0) == (variant in (0, 2))
     lo, hi = v_lo[index], v_hi[index]
     return u[index], np.where(up, lo, hi), np.where(up, hi, lo), index
+
+
+def order_boustrophedon(n: int, variant: int) -> tuple[IntArray, npt.NDArray[np.bool_]]:
+    """Drive ``n`` lines back and forth, neighbour after neighbour (today's pattern).
+
+    Returns
+    -------
+    index : ndarray of int, shape (n,)
+        Left-to-right index of each line, in driving order.
+    up : ndarray of bool, shape (n,)
+        Whether each driven line runs towards ``v_hi``.
+
+    Examples
+    --------
+    >>> index, up = order_boustrophedon(4, 2)
+    >>> index.tolist(), up.tolist()
+    ([3, 2, 1, 0], [True, False, True, False])
+    """
+    index = np.arange(n) if variant < 2 else np.arange(n)[::-1].copy()
+    up = (np.arange(n) % 2 == 0) == (variant in (0, 2))
+    return index.astype(np.int64), up
+
+
+def order_snake(n: int, variant: int, *, skip: int) -> tuple[IntArray, npt.NDArray[np.bool_]]:
+    """Drive ``n`` lines ``skip`` apart, so that a turning radius needs no loops (snake).
+
+    The lines are taken in ``skip`` interleaved passes across the field, out and back: every
+    ``skip``-th line from the first side, then the lines between them on the way back, and so
+    on (Fields2Cover's ``SnakeOrder`` with any skip). Consecutive lines are ``skip`` lines
+    apart except where one pass hands over to the next.
+
+    Parameters
+    ----------
+    n : int
+    variant : int
+        As :data:`VARIANTS`: which side first and which end first.
+    skip : int
+        Lines from one driven line to the next; 1 is back and forth.
+
+    Returns
+    -------
+    index, up : ndarray
+        As :func:`order_boustrophedon`.
+
+    Examples
+    --------
+    >>> order_snake(7, 0, skip=2)[0].tolist()
+    [0, 2, 4, 6, 5, 3, 1]
+    >>> order_snake(8, 0, skip=3)[0].tolist()
+    [0, 3, 6, 7, 4, 1, 2, 5]
+    """
+    if skip <= 1 or n <= 2:
+        return order_boustrophedon(n, variant)
+    passes = [np.arange(j, n, skip) for j in range(min(skip, n))]
+    index = np.concatenate([p if j % 2 == 0 else p[::-1] for j, p in enumerate(passes)])
+    if variant >= 2:
+        index = n - 1 - index
+    up = (np.arange(n) % 2 == 0) == (variant in (0, 2))
+    return index.astype(np.int64), up

@@ -5,9 +5,10 @@ This module only chains the stages; the geometry lives in the stage modules.
 
 from __future__ import annotations
 
+import itertools
 import time
-from dataclasses import dataclass, field
-from typing import Any, cast
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -15,26 +16,28 @@ import shapely
 from shapely import Polygon
 
 from planner import angles, general, validation
-from planner.coverage import cell_area, convex_chains, covered_area
-from planner.errors import InvalidParameterError
+from planner.fitted_choice import choose_convex
+from planner.general import add_fitted_lines
 from planner.heading_coverage import convex_coverage
-from planner.lines import from_sweep, line_positions, to_sweep
-from planner.ordering import VariantLengths, ordered_line_ends, score_headings
+from planner.line_ends import fitting_loss_m2
+from planner.lines import line_counts, to_sweep
+from planner.ordering import VariantLengths, score_headings
 from planner.projection import LocalFrame, field_frame
 from planner.spiral import order_spiral
-from planner.turns import pivot_time_s
+from planner.turns import driving_time_s
 from planner.types import (
     DEFAULT_SPEED_MPS,
-    DEFAULT_TRACK_WIDTH_M,
-    PATTERNS,
     CoveragePlan,
     Objective,
     PathSegment,
+    Pattern,
     PlanStats,
     SegmentKind,
+    Vehicle,
     Waypoint,
     WaypointRole,
 )
+from planner.vehicles import resolve_vehicle
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -53,10 +56,11 @@ def plan_coverage(
     objective: str = "shortest_path",
     headland_passes: int = 0,
     speed_mps: float = DEFAULT_SPEED_MPS,
-    track_width_m: float = DEFAULT_TRACK_WIDTH_M,
+    implement_width_m: float | None = None,
+    vehicle: Any = None,
     pattern: str = "boustrophedon",
 ) -> CoveragePlan:
-    """Plan the back-and-forth tillage path over a field.
+    """Plan the back-and-forth tillage path over a field for a vehicle and its implement.
 
     Parameters
     ----------
@@ -74,10 +78,17 @@ def plan_coverage(
         Rounds along the inside of the boundary, 0–5, driven after the lines.
     speed_mps : float
         Working speed [m/s], for the time estimate.
-    track_width_m : float
-        Wheel track [m]; sets how long a pivot turn takes.
-    pattern : {"boustrophedon", "spiral"}
-        Adjacent lines back and forth, or rounds inward with the core back and forth
+    implement_width_m : float, optional
+        Working width of the implement [m], 0.1–50; coverage (R4) is measured with it. Wider
+        than the interval: the passes overlap; narrower: strips are left. Default: the
+        interval.
+    vehicle : str, mapping or Vehicle, optional
+        The machine (product.md §3a): a preset name, ``{"preset": …, <field>: …}`` or a
+        :class:`~planner.types.Vehicle`; default ``hand_tractor``. Its body stays inside the
+        field and its turns are curves it can drive (R1).
+    pattern : {"boustrophedon", "snake", "spiral"}
+        Line order: neighbours back and forth, skipping lines so that turns need no loops
+        (:func:`planner.ordering.order_snake`), or rounds inward with the core back and forth
         (:func:`planner.spiral.order_spiral`).
 
     Returns
@@ -94,9 +105,9 @@ def plan_coverage(
     >>> from shapely import Polygon
     >>> field = Polygon([(115.298, -8.6265), (115.29813989, -8.62649238),
     ...                  (115.29814712, -8.62631751), (115.29800448, -8.62632237)])
-    >>> plan = plan_coverage(field, interval_m=4.0, angle_deg=1.0)
-    >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]]
-    (4, ['line_start', 'line_end', 'line_start'])
+    >>> plan = plan_coverage(field, interval_m=4.0, angle_deg=1.0)   # a hand tractor pivots
+    >>> plan.stats.line_count, [w.role for w in plan.waypoints[:3]], plan.vehicle.preset
+    (4, ['line_start', 'line_end', 'turn'], 'hand_tractor')
     """
     started = time.perf_counter()
     interval = validation.validate_interval(interval_m)
@@ -104,11 +115,10 @@ def plan_coverage(
     goal = validation.validate_objective(objective)
     passes = validation.validate_headland_passes(headland_passes)
     speed = validation.validate_speed(speed_mps)
+    machine = resolve_vehicle(vehicle)
+    implement = validation.validate_implement_width(implement_width_m, interval)
+    order = validation.validate_pattern(pattern)
     field_lonlat, area_m2 = validation.validate_field(field_lonlat)
-    if pattern not in PATTERNS:
-        raise InvalidParameterError("pattern", f"must be one of {', '.join(PATTERNS)}")
-    if pattern == "snake":
-        raise InvalidParameterError("pattern", "snake is not available yet")
 
     frame = field_frame(field_lonlat)
     field_local = frame.to_local(field_lonlat)
@@ -118,9 +128,17 @@ def plan_coverage(
     finish_xy = validation.validate_point(
         finish_lonlat, input_name="finish", frame=frame, field_local=field_local
     )
-    if pattern == "spiral":
+    # The one pattern dispatch: spiral rounds here; boustrophedon and snake differ only in
+    # the order of the lines (and so the turns), below.
+    if order == "spiral":
         spiral = order_spiral(
-            field_local, interval_m=interval, start_xy=start_xy, finish_xy=finish_xy, objective=goal
+            field_local,
+            interval_m=interval,
+            start_xy=start_xy,
+            finish_xy=finish_xy,
+            objective=goal,
+            vehicle=machine,
+            implement_width_m=implement,
         )
         spiral_route = spiral.route
         route = _Route(
@@ -143,7 +161,8 @@ def plan_coverage(
             coverage_ratio=spiral.coverage_ratio,
             coverage_given_up_pp=0.0,
             speed_mps=speed,
-            track_width_m=track_width_m,
+            vehicle=machine,
+            implement_width_m=implement,
             area_m2=area_m2,
             started=started,
         )
@@ -161,36 +180,54 @@ def plan_coverage(
             objective=goal,
             passes=passes,
             speed_mps=speed,
-            track_width_m=track_width_m,
+            vehicle=machine,
+            implement_width_m=implement,
+            pattern=order,
             area_m2=area_m2,
             started=started,
         )
 
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
+    headings = angles.candidate_headings(ring_xy, fixed_heading)
 
     def lengths_of(headings: FloatArray) -> tuple[VariantLengths, IntArray]:
         return score_headings(ring_xy, headings, interval, start_xy, finish_xy)
 
+    field_m2 = float(field_local.area)
+
     def coverage_of(headings: FloatArray) -> FloatArray:
-        return convex_coverage(ring_xy, headings, interval)
+        # Closed-form coverage of straight lines, less what fitting them for the vehicle
+        # will take (ends on the machine area, pulled back for the turns).
+        u_ring, _ = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
+        counts = line_counts(np.ptp(u_ring, axis=1), interval)
+        loss = fitting_loss_m2(machine, interval, counts) / field_m2
+        return convex_coverage(ring_xy, headings, interval) - loss
 
     choice = angles.search_headings(
-        lengths_of,
-        coverage_of,
-        angles.candidate_headings(ring_xy, fixed_heading),
-        goal,
-        interval_m=interval,
-        refine=fixed_heading is None,
+        lengths_of, coverage_of, headings, goal, interval_m=interval, refine=fixed_heading is None
     )
-    heading, variant = choice.heading_deg, choice.variant
-    u, v_lo, v_hi, coverage_ratio = _convex_plan_lines(ring_xy, heading, interval)
+    # One convex cell: its lines end where the vehicle's turns fit inside the field, and
+    # the coverage rule is held on those lines (the search scored straight ones).
+    picked = choose_convex(
+        field_local,
+        choice,
+        interval_m=interval,
+        implement_width_m=implement,
+        vehicle=machine,
+        pattern=order,
+        objective=goal,
+        start_xy=start_xy,
+        finish_xy=finish_xy,
+        lengths_of=lengths_of,
+        fixed_heading=fixed_heading is not None,
+    )
+    heading, fit = picked.chosen.heading_deg, picked.chosen.fit
     route = _Route()
     if start_xy is not None:
         route.add("start", None, [start_xy])
-    _add_lines(route, heading, u, v_lo, v_hi, variant)
+    add_fitted_lines(route, heading, fit)  # type: ignore[arg-type]
     if finish_xy is not None:
         route.add("finish", None, [finish_xy])
-
     return _assemble(
         route,
         frame=frame,
@@ -198,27 +235,15 @@ def plan_coverage(
         cells_local=[field_local],
         interval_m=interval,
         heading_deg=heading,
-        line_count=len(u),
-        coverage_ratio=coverage_ratio,
-        coverage_given_up_pp=choice.coverage_given_up_pp,
+        line_count=len(fit.u),
+        coverage_ratio=picked.chosen.covered_m2 / float(field_local.area),
+        coverage_given_up_pp=picked.coverage_given_up_pp,
         speed_mps=speed,
-        track_width_m=track_width_m,
+        vehicle=machine,
+        implement_width_m=implement,
         area_m2=area_m2,
         started=started,
     )
-
-
-def _convex_plan_lines(
-    ring_xy: FloatArray, heading: float, interval_m: float
-) -> tuple[FloatArray, FloatArray, FloatArray, float]:
-    """Place a convex field's lines at ``heading`` (sweep frame); their coverage ratio (R4)."""
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], heading)
-    chains = convex_chains(u_ring, v_ring)
-    u = line_positions(chains.u_min, chains.u_max, interval_m)
-    v_lo = np.interp(u, chains.lo_u, chains.lo_v)
-    v_hi = np.interp(u, chains.hi_u, chains.hi_v)
-    covered = covered_area(chains, u, v_lo, v_hi, interval_m)
-    return u, v_lo, v_hi, covered / cell_area(chains)
 
 
 def _plan_general(
@@ -233,7 +258,9 @@ def _plan_general(
     objective: Objective,
     passes: int,
     speed_mps: float,
-    track_width_m: float,
+    vehicle: Vehicle,
+    implement_width_m: float,
+    pattern: Pattern,
     area_m2: float,
     started: float,
 ) -> CoveragePlan:
@@ -246,6 +273,9 @@ def _plan_general(
         fixed_heading_deg=fixed_heading,
         objective=objective,
         headland_passes=passes,
+        vehicle=vehicle,
+        implement_width_m=implement_width_m,
+        pattern=pattern,
     )
     built = plan.route
     route = _Route(
@@ -264,7 +294,8 @@ def _plan_general(
         coverage_ratio=plan.coverage_ratio,
         coverage_given_up_pp=plan.coverage_given_up_pp,
         speed_mps=speed_mps,
-        track_width_m=track_width_m,
+        vehicle=vehicle,
+        implement_width_m=implement_width_m,
         area_m2=area_m2,
         started=started,
     )
@@ -301,23 +332,6 @@ class _Route:
         self.lines.extend(lines)
 
 
-def _add_lines(
-    route: _Route, heading: float, u: FloatArray, v_lo: FloatArray, v_hi: FloatArray, variant: int
-) -> None:
-    u_ord, v_from, v_to, index = ordered_line_ends(u, v_lo, v_hi, variant)
-    n = len(u_ord)
-    x, y = from_sweep(np.repeat(u_ord, 2), np.stack([v_from, v_to], axis=1).ravel(), heading)
-    first = len(route.x)
-    if first:
-        route.segments.append(("transit", None, first - 1, first))
-    line_of = cast("list[int | None]", np.repeat(index, 2).tolist())
-    route.extend(x, y, ["line_start", "line_end"] * n, line_of)
-    for k in range(n):
-        route.segments.append(("line", int(index[k]), first + 2 * k, first + 2 * k + 1))
-        if k + 1 < n:
-            route.segments.append(("turn", None, first + 2 * k + 1, first + 2 * k + 2))
-
-
 def _assemble(
     route: _Route,
     *,
@@ -330,7 +344,8 @@ def _assemble(
     coverage_ratio: float,
     coverage_given_up_pp: float,
     speed_mps: float,
-    track_width_m: float,
+    vehicle: Vehicle,
+    implement_width_m: float,
     area_m2: float,
     started: float,
 ) -> CoveragePlan:
@@ -342,8 +357,9 @@ def _assemble(
     lat = np.round(lat, LONLAT_DECIMALS)
     lon_list, lat_list = lon.tolist(), lat.tolist()
     waypoints = tuple(
-        Waypoint(seq, lon_list[seq], lat_list[seq], route.roles[seq], route.lines[seq])
-        for seq in range(len(x))
+        itertools.starmap(
+            Waypoint, zip(range(len(x)), lon_list, lat_list, route.roles, route.lines, strict=True)
+        )
     )
     step = np.hypot(np.diff(x), np.diff(y))
     distance = np.concatenate(([0.0], np.cumsum(step)))
@@ -360,9 +376,7 @@ def _assemble(
         for kind, index, first, last in route.segments
     ]
     path_length = float(distance[-1])
-    estimated_time = path_length / speed_mps + pivot_time_s(
-        x, y, speed_mps=speed_mps, track_width_m=track_width_m
-    )
+    estimated_time = driving_time_s(x, y, speed_mps=speed_mps, turn_rate_dps=vehicle.turn_rate_dps)
     stats = PlanStats(
         area_m2=round(area_m2, 2),
         line_count=line_count,
@@ -375,6 +389,9 @@ def _assemble(
         angle_deg=round(heading_deg % 180.0, 6),
         estimated_time_s=round(estimated_time, 1),
         planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
+        implement_width_m=implement_width_m,
+        overlap_m=round(implement_width_m - interval_m, 6),
+        vehicle=asdict(vehicle),
         coverage_given_up_pp=round(coverage_given_up_pp, 4),
     )
     return CoveragePlan(
@@ -384,4 +401,6 @@ def _assemble(
         stats=stats,
         interval_m=interval_m,
         cells_lonlat=tuple(frame.to_lonlat(cell) for cell in cells_local),
+        vehicle=vehicle,
+        implement_width_m=implement_width_m,
     )

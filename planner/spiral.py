@@ -9,6 +9,12 @@ the boustrophedon planner (:func:`planner.general.plan_general`). Every round is
 around, entered at its point nearest the tractor, and every move between rounds and into the
 core is routed inside the field (:class:`planner.routing.FieldRouter`), so the route is one
 continuous path: each segment begins where the one before it ends.
+
+The vehicle's body stays inside the field (R1): when half its width is more than half an
+interval, every round moves inward by the difference (the field is shrunk by it first), and
+the core is planned for the same vehicle (its lines pulled back from the core's edge, its
+turns ones the vehicle can drive). The rounds' corners are driven as the polygon's vertices:
+a vehicle with a turning radius rounds them off itself (the spiral fits no turn curves).
 """
 
 from __future__ import annotations
@@ -18,12 +24,14 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 import shapely
-from shapely import LinearRing, Polygon
+from shapely import LinearRing, MultiPolygon, Polygon
 
 from planner import general
 from planner.general import RouteBuilder
+from planner.line_ends import machine_area
 from planner.routing import FieldRouter
-from planner.types import Objective
+from planner.types import Objective, Vehicle
+from planner.vehicles import resolve_vehicle
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -69,6 +77,8 @@ def order_spiral(
     start_xy: tuple[float, float] | None = None,
     finish_xy: tuple[float, float] | None = None,
     objective: Objective = "shortest_path",
+    vehicle: Vehicle | None = None,
+    implement_width_m: float | None = None,
 ) -> SpiralPlan:
     """Cover ``field_local`` with inward rounds joined into one path, the core back and forth.
 
@@ -82,6 +92,10 @@ def order_spiral(
         Where the tractor comes from and must end, local [m].
     objective : {"shortest_path", "fewest_lines"}
         For the core's heading search.
+    vehicle : Vehicle, optional
+        The machine (default the hand tractor): its half-width keeps the body inside.
+    implement_width_m : float, optional
+        What one pass tills [m], for the coverage; default ``interval_m``.
 
     Returns
     -------
@@ -97,9 +111,20 @@ def order_spiral(
     """
     field_local = shapely.orient_polygons(field_local)
     d = float(interval_m)
-    router = FieldRouter(field_local)
-    levels = _round_levels(field_local, d)
-    core_parts = _parts(field_local.buffer(-len(levels) * d, join_style="mitre"))
+    machine = resolve_vehicle(vehicle)
+    implement = d if implement_width_m is None else float(implement_width_m)
+    area = machine_area(field_local, machine)  # raises if the vehicle does not fit
+    router = FieldRouter(area if isinstance(area, Polygon) else field_local)
+    # Round 0 runs d/2 inside the boundary; a body wider than the interval needs more.
+    inset_m = max(0.0, machine.width_m / 2.0 - d / 2.0)
+    work: Polygon | MultiPolygon = field_local
+    if inset_m > 0.0:
+        inset = _parts(field_local.buffer(-inset_m, join_style="mitre"))
+        work = inset[0] if len(inset) == 1 else MultiPolygon(inset)
+    levels = _round_levels(work, d)
+    core_parts = _parts(work.buffer(-len(levels) * d, join_style="mitre"))
+    # A core piece narrower than the body holds no line it could drive: the rounds cover it.
+    core_parts = [p for p in core_parts if not p.buffer(-machine.width_m / 2.0).is_empty]
 
     route = RouteBuilder()
     if start_xy is not None:
@@ -124,6 +149,8 @@ def order_spiral(
             fixed_heading_deg=None,
             objective=objective,
             headland_passes=0,
+            vehicle=machine,
+            implement_width_m=implement,
         )
         _join(route, core.route, router)
         heading = core.heading_deg
@@ -137,7 +164,7 @@ def order_spiral(
         band = field_local.difference(shapely.union_all(core_parts)) if core_parts else field_local
         footprints = shapely.union_all(
             [
-                ring.buffer(d / 2.0, cap_style="flat", join_style="mitre")
+                ring.buffer(implement / 2.0, cap_style="flat", join_style="mitre")
                 for rings in levels
                 for ring in rings
             ]
@@ -163,7 +190,7 @@ def _parts(geometry: shapely.Geometry) -> list[Polygon]:
     return parts
 
 
-def _round_levels(field_local: Polygon, d: float) -> list[list[LinearRing]]:
+def _round_levels(field_local: Polygon | MultiPolygon, d: float) -> list[list[LinearRing]]:
     """Return the rings of every round level, outermost first.
 
     A level is kept while its centre line exists and the area inside its band is in no more

@@ -1,32 +1,486 @@
-"""Turns: how the tractor gets from the end of one line to the start of the next.
+"""Turns: how the vehicle gets from the end of one line to the start of the next.
 
-A walk-behind tractor turns by pulling one clutch and pivoting about that wheel, so a turn is
-the straight move between the two line ends, with a pivot at each. Inside a convex cell that
-move stays inside the cell (R1).
+One function per turn type (Fields2Cover's ``PP_DubinsCurves`` and ``PP_ReedsSheppCurves``),
+each taking many turns at once and returning the curves the vehicle drives, in local metres,
+with points at most ``step_m`` apart (0.5 m) and close enough that the chords stay within
+:data:`SAGITTA_M` of the arcs:
+
+- :func:`pivot_turn`: a vehicle that pivots about a braked wheel (a walk-behind hand tractor).
+  Its axle centre moves on a circle of radius ``track / 2`` round the stopped wheel, so a
+  pivot is an arc of that radius and the vehicle is a Dubins car with radius ``track / 2``:
+  two pivots shift the axle sideways by one track, the straight between them makes up the
+  rest of the spacing; below one track, the extra manoeuvre is the Ω of three pivots (or,
+  if it may reverse, the Reeds–Shepp manoeuvre with a short reverse).
+- :func:`dubins_turn`: forward only, the shortest of the six Dubins words (Dubins 1957) at
+  the minimum turning radius; closed forms after Shkel & Lumelsky (2001), vectorised.
+- :func:`bulb_turn`: the Ω (bulb) turn, the CCC words only, for a radius larger than half
+  the spacing.
+- :func:`reeds_shepp_turn`: forwards and backwards (Reeds & Shepp 1990), one path per turn
+  from the ``rsplan`` library.
+
+Poses are ``(x, y, yaw)`` with ``yaw`` in radians counter-clockwise from +x (the textbook
+convention of these curves), local [m].
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 import numpy.typing as npt
 
+from planner.types import Vehicle
+
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: Largest distance between two points of an exported turn [m] (product.md R1).
+STEP_M = 0.5
+#: Largest gap between an arc and its chords [m]: R1 allows 1 cm.
+SAGITTA_M = 0.01
+#: The six Dubins words; each letter's sign: +1 left, -1 right, 0 straight.
+DUBINS_WORDS: dict[str, tuple[int, int, int]] = {
+    "LSL": (1, 0, 1),
+    "RSR": (-1, 0, -1),
+    "LSR": (1, 0, -1),
+    "RSL": (-1, 0, 1),
+    "RLR": (-1, 1, -1),
+    "LRL": (1, -1, 1),
+}
+BULB_WORDS = ("RLR", "LRL")
+_TWO_PI = 2.0 * math.pi
 
 
-def pivot_time_s(x: FloatArray, y: FloatArray, *, speed_mps: float, track_width_m: float) -> float:
-    """Time spent pivoting along a polyline [s].
+@dataclass(frozen=True, slots=True)
+class TurnEnds:
+    """Where many turns start and end: poses, local [m] and [rad].
 
-    Pulling one clutch stops that wheel; the other drives round it at ``speed_mps``, so the
-    tractor turns at ``speed_mps / track_width_m`` rad/s. Zero-length steps are ignored.
+    Attributes
+    ----------
+    x0, y0, yaw0 : ndarray, shape (T,)
+        End of the line the vehicle leaves, and its heading there.
+    x1, y1, yaw1 : ndarray, shape (T,)
+        Start of the next line, and the heading it is driven in.
+    """
+
+    x0: FloatArray
+    y0: FloatArray
+    yaw0: FloatArray
+    x1: FloatArray
+    y1: FloatArray
+    yaw1: FloatArray
+
+    def __len__(self) -> int:
+        """Return the number of turns."""
+        return len(self.x0)
+
+
+@dataclass(frozen=True, slots=True)
+class TurnCurves:
+    """Driven curves of many turns, as one ragged array.
+
+    Attributes
+    ----------
+    xy : ndarray, shape (P, 2)
+        The points of every turn, start and end included, local [m].
+    offsets : ndarray, shape (T + 1,)
+        Turn ``k`` is ``xy[offsets[k]:offsets[k + 1]]``.
+    length_m : ndarray, shape (T,)
+        Length driven [m] (forwards plus backwards).
+    turn_rad : ndarray, shape (T,)
+        Total heading change [rad], for the time the vehicle spends turning.
+    radius_m : float
+        Radius of the arcs [m]: curvature never above ``1 / radius_m``.
+    """
+
+    xy: FloatArray
+    offsets: IntArray
+    length_m: FloatArray
+    turn_rad: FloatArray
+    radius_m: float
+
+    def curve(self, k: int) -> FloatArray:
+        """Points of turn ``k``, shape (p, 2)."""
+        return self.xy[self.offsets[k] : self.offsets[k + 1]]
+
+    def __len__(self) -> int:
+        """Return the number of turns."""
+        return len(self.offsets) - 1
+
+
+def pivot_turn(
+    ends: TurnEnds, *, track_m: float, can_reverse: bool = False, step_m: float = STEP_M
+) -> TurnCurves:
+    """Plan the turns of a vehicle that pivots about a braked wheel, as it really moves.
+
+    Pulling one clutch stops that wheel and the other drives round it: the axle centre moves
+    on a circle of radius ``track_m / 2`` about the stopped wheel. Two quarter pivots at a
+    headland therefore shift the axle sideways by exactly one track, and the straight move
+    between them supplies the rest of the spacing; at a spacing below one track the vehicle
+    needs another manoeuvre: forward only, the Ω of three pivots (turn away, round, back);
+    with ``can_reverse``, a pivot, a short reverse and a pivot (Reeds–Shepp).
+
+    Parameters
+    ----------
+    ends : TurnEnds
+    track_m : float
+        Distance between the wheels [m], > 0.
+    can_reverse : bool
+        Whether the vehicle may back up.
+    step_m : float
+        Largest distance between points [m].
+
+    Returns
+    -------
+    TurnCurves
+        Arcs of radius ``track_m / 2``.
 
     Examples
     --------
-    >>> round(pivot_time_s(np.array([0.0, 0, 4, 4]), np.array([0.0, 10, 10, 0]),
-    ...                    speed_mps=0.56, track_width_m=1.8), 2)   # two right angles
-    10.1
+    A 4 m U-turn of a 0.7 m-track hand tractor: two quarter pivots and 3.3 m straight.
+
+    >>> ends = TurnEnds(*(np.array([v]) for v in (0.0, 0.0, math.pi / 2, 4.0, 0.0, -math.pi / 2)))
+    >>> turn = pivot_turn(ends, track_m=0.7)
+    >>> round(float(turn.length_m[0]), 3), round(float(turn.curve(0)[:, 1].max()), 3)
+    (4.4, 0.35)
+    """
+    radius = track_m / 2.0
+    if can_reverse:
+        return reeds_shepp_turn(ends, radius_m=radius, step_m=step_m)
+    return dubins_turn(ends, radius_m=radius, step_m=step_m)
+
+
+def dubins_turn(
+    ends: TurnEnds,
+    *,
+    radius_m: float,
+    step_m: float = STEP_M,
+    words: tuple[str, ...] = tuple(DUBINS_WORDS),
+) -> TurnCurves:
+    """Shortest forward-only turns with a minimum turning radius (Dubins curves).
+
+    Every turn tries the words in ``words`` in closed form and keeps the shortest; all turns
+    are solved together in numpy.
+
+    Parameters
+    ----------
+    ends : TurnEnds
+    radius_m : float
+        Minimum turning radius [m], > 0.
+    step_m : float
+        Largest distance between points [m].
+    words : tuple of str
+        Dubins words allowed (``LSL``, ``RSR``, ``LSR``, ``RSL``, ``RLR``, ``LRL``).
+
+    Returns
+    -------
+    TurnCurves
+
+    Examples
+    --------
+    A 10 m U-turn at a 3 m radius: two quarter circles and 4 m straight.
+
+    >>> ends = TurnEnds(*(np.array([v]) for v in (0.0, 0.0, math.pi / 2, 10.0, 0.0, -math.pi / 2)))
+    >>> round(float(dubins_turn(ends, radius_m=3.0).length_m[0]), 4)
+    13.4248
+    """
+    signs, params = dubins_words(ends, radius_m=radius_m, words=words)
+    return _sample(ends, signs, params * radius_m, radius_m, step_m)
+
+
+def bulb_turn(ends: TurnEnds, *, radius_m: float, step_m: float = STEP_M) -> TurnCurves:
+    """Ω (bulb) turns: away, round and back, for a radius larger than half the spacing.
+
+    A vehicle whose turning circle is wider than the spacing cannot reach the next line by
+    two turns in one direction; it swings out the other way first. These are the Dubins CCC
+    words (``RLR``, ``LRL``).
+
+    Examples
+    --------
+    A 2 m spacing at a 3 m radius: the bulb reaches 3 + √(36 − 16) ≈ 7.47 m past the line end.
+
+    >>> ends = TurnEnds(*(np.array([v]) for v in (0.0, 0.0, math.pi / 2, 2.0, 0.0, -math.pi / 2)))
+    >>> round(float(bulb_turn(ends, radius_m=3.0).curve(0)[:, 1].max()), 2)
+    7.47
+    """
+    return dubins_turn(ends, radius_m=radius_m, step_m=step_m, words=BULB_WORDS)
+
+
+def reeds_shepp_turn(ends: TurnEnds, *, radius_m: float, step_m: float = STEP_M) -> TurnCurves:
+    """Shortest turns forwards and backwards with a minimum turning radius (Reeds–Shepp).
+
+    One path per turn from ``rsplan`` (Built Robotics' implementation of Reeds & Shepp
+    1990, shortest path kept), sampled here like the other turns.
+
+    Examples
+    --------
+    Below twice the radius, backing up beats the bulb:
+
+    >>> ends = TurnEnds(*(np.array([v]) for v in (0.0, 0.0, math.pi / 2, 2.0, 0.0, -math.pi / 2)))
+    >>> backing = reeds_shepp_turn(ends, radius_m=3.0)
+    >>> bool(backing.length_m[0] < bulb_turn(ends, radius_m=3.0).length_m[0])
+    True
+    """
+    from rsplan.planner import path as rs_path  # pure Python; imported on first use only
+
+    n = len(ends)
+    signs = np.zeros((n, 5), dtype=np.int64)
+    lengths = np.zeros((n, 5))
+    backwards = np.zeros((n, 5), dtype=bool)
+    kinds = {"left": 1, "right": -1, "straight": 0}
+    for k in range(n):
+        path = rs_path(
+            (float(ends.x0[k]), float(ends.y0[k]), float(ends.yaw0[k])),
+            (float(ends.x1[k]), float(ends.y1[k]), float(ends.yaw1[k])),
+            radius_m,
+            0.0,
+            step_m,
+            length_tolerance=0.0,
+        )
+        for s, segment in enumerate(path.segments[:5]):
+            signs[k, s] = kinds[segment.type]
+            lengths[k, s] = abs(float(segment.length))
+            backwards[k, s] = segment.direction < 0
+    return _sample(ends, signs, np.where(backwards, -lengths, lengths), radius_m, step_m)
+
+
+def dubins_words(
+    ends: TurnEnds, *, radius_m: float, words: tuple[str, ...] = tuple(DUBINS_WORDS)
+) -> tuple[IntArray, FloatArray]:
+    """Find the shortest Dubins word of every turn: segment signs and normalised lengths.
+
+    Returns
+    -------
+    signs : ndarray of int, shape (T, 3)
+        +1 left arc, -1 right arc, 0 straight.
+    params : ndarray, shape (T, 3)
+        Segment lengths divided by ``radius_m`` (arc angles [rad] for arcs).
+    """
+    dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
+    d = np.hypot(dx, dy) / radius_m
+    theta = np.arctan2(dy, dx)
+    a = _mod2pi(ends.yaw0 - theta)
+    b = _mod2pi(ends.yaw1 - theta)
+    sa, sb, ca, cb = np.sin(a), np.sin(b), np.cos(a), np.cos(b)
+    c_ab = np.cos(a - b)
+    dd = d * d
+    candidates: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+    with np.errstate(invalid="ignore"):
+        for word in words:
+            if word == "LSL":
+                p_sq = 2.0 + dd - 2.0 * c_ab + 2.0 * d * (sa - sb)
+                tmp = np.arctan2(cb - ca, d + sa - sb)
+                t, p, q = tmp - a, np.sqrt(p_sq), b - tmp
+            elif word == "RSR":
+                p_sq = 2.0 + dd - 2.0 * c_ab + 2.0 * d * (sb - sa)
+                tmp = np.arctan2(ca - cb, d - sa + sb)
+                t, p, q = a - tmp, np.sqrt(p_sq), tmp - b
+            elif word == "LSR":
+                p = np.sqrt(-2.0 + dd + 2.0 * c_ab + 2.0 * d * (sa + sb))
+                tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
+                t, q = tmp - a, tmp - b
+            elif word == "RSL":
+                p = np.sqrt(-2.0 + dd + 2.0 * c_ab - 2.0 * d * (sa + sb))
+                tmp = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
+                t, q = a - tmp, b - tmp
+            elif word == "RLR":
+                c = (6.0 - dd + 2.0 * c_ab + 2.0 * d * (sa - sb)) / 8.0
+                phi = np.arctan2(ca - cb, d - sa + sb)
+                p = _TWO_PI - np.arccos(c)  # NaN where |c| > 1: no such path
+                t = _mod2pi(a - phi + p / 2.0)
+                q = a - b - t + p
+            elif word == "LRL":
+                c = (6.0 - dd + 2.0 * c_ab + 2.0 * d * (sb - sa)) / 8.0
+                phi = np.arctan2(ca - cb, d + sa - sb)
+                p = _TWO_PI - np.arccos(c)
+                t = _mod2pi(-a - phi + p / 2.0)
+                q = b - a - t + p
+            else:
+                raise ValueError(f"unknown Dubins word {word!r}")
+            candidates.append((_mod2pi(t), p, _mod2pi(q)))
+    tpq = np.array(candidates)  # (words, 3, T); NaN where a word has no path
+    total = np.nan_to_num(tpq.sum(axis=1), nan=np.inf)
+    if not np.isfinite(total).any(axis=0).all():
+        raise ValueError("no Dubins word joins these poses")  # only if ``words`` is narrowed
+    best = np.argmin(total, axis=0)
+    turn_index = np.arange(len(d))
+    params = tpq[best, :, turn_index]
+    signs = np.array([DUBINS_WORDS[w] for w in words], dtype=np.int64)[best]
+    return signs, params
+
+
+def turn_depth_m(
+    curves: TurnCurves, x0: FloatArray, y0: FloatArray, yaw0: FloatArray
+) -> FloatArray:
+    """How far each turn reaches beyond its start, along the start heading [m]."""
+    k = np.repeat(np.arange(len(curves)), np.diff(curves.offsets))
+    along = (curves.xy[:, 0] - x0[k]) * np.cos(yaw0[k]) + (curves.xy[:, 1] - y0[k]) * np.sin(
+        yaw0[k]
+    )
+    depth = np.full(len(curves), -np.inf)
+    np.maximum.at(depth, k, along)
+    return depth
+
+
+def _mod2pi(angle: FloatArray) -> FloatArray:
+    return np.mod(angle, _TWO_PI)
+
+
+def _sample(
+    ends: TurnEnds, signs: IntArray, lengths: FloatArray, radius_m: float, step_m: float
+) -> TurnCurves:
+    """Integrate and sample segments (sign: arc direction; signed length: backwards < 0)."""
+    n, m = signs.shape
+    arc_step = min(step_m, 2.0 * radius_m * math.acos(max(-1.0, 1.0 - SAGITTA_M / radius_m)))
+    seg_step = np.where(signs != 0, arc_step, step_m)
+    pieces = np.where(np.abs(lengths) > 1e-12, np.ceil(np.abs(lengths) / seg_step), 0)
+    pieces = pieces.astype(np.int64)
+    # Start pose of every segment.
+    x, y, yaw = ends.x0.copy(), ends.y0.copy(), ends.yaw0.copy()
+    seg_x, seg_y, seg_yaw = np.empty((n, m)), np.empty((n, m)), np.empty((n, m))
+    for s in range(m):
+        seg_x[:, s], seg_y[:, s], seg_yaw[:, s] = x, y, yaw
+        x, y, yaw = _advance(x, y, yaw, signs[:, s], lengths[:, s], radius_m)
+    flat = pieces.ravel()
+    seg = np.repeat(np.arange(n * m), flat)
+    within = np.arange(flat.sum()) - np.repeat(np.cumsum(flat) - flat, flat)
+    frac = (within + 1) / flat[seg]
+    px, py, _ = _advance(
+        seg_x.ravel()[seg],
+        seg_y.ravel()[seg],
+        seg_yaw.ravel()[seg],
+        signs.ravel()[seg],
+        lengths.ravel()[seg] * frac,
+        radius_m,
+    )
+    per_turn = pieces.sum(axis=1) + 1
+    offsets = np.concatenate(([0], np.cumsum(per_turn))).astype(np.int64)
+    xy = np.empty((offsets[-1], 2))
+    first = offsets[:-1]
+    xy[first, 0], xy[first, 1] = ends.x0, ends.y0
+    rest = np.ones(offsets[-1], dtype=bool)
+    rest[first] = False
+    xy[rest, 0], xy[rest, 1] = px, py
+    # The last point is the target exactly (the integration agrees to ~1e-12 m).
+    xy[offsets[1:] - 1, 0], xy[offsets[1:] - 1, 1] = ends.x1, ends.y1
+    turning = np.where(signs != 0, np.abs(lengths) / radius_m, 0.0).sum(axis=1)
+    return TurnCurves(xy, offsets, np.abs(lengths).sum(axis=1), turning, float(radius_m))
+
+
+def _advance(
+    x: FloatArray,
+    y: FloatArray,
+    yaw: FloatArray,
+    sign: IntArray,
+    length: FloatArray,
+    radius_m: float,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Drive ``length`` [m] (negative: backwards) on an arc of ``sign`` (0: straight)."""
+    kappa = sign / radius_m
+    new_yaw = yaw + kappa * length
+    with np.errstate(divide="ignore", invalid="ignore"):
+        arc_x = x + (np.sin(new_yaw) - np.sin(yaw)) / kappa
+        arc_y = y - (np.cos(new_yaw) - np.cos(yaw)) / kappa
+    straight = sign == 0
+    nx = np.where(straight, x + length * np.cos(yaw), arc_x)
+    ny = np.where(straight, y + length * np.sin(yaw), arc_y)
+    return nx, ny, new_yaw
+
+
+def driving_time_s(
+    x: FloatArray, y: FloatArray, *, speed_mps: float, turn_rate_dps: float
+) -> float:
+    """Time to drive a polyline [s]: at ``speed_mps``, slower where it turns.
+
+    A vertex between two short steps (at most :data:`STEP_M`, a sampled turn) is on an arc:
+    the steps beside it take ``max(length / speed, heading change / turn rate)``. A vertex
+    between longer steps is a corner the vehicle turns on the spot: its angle at the turn
+    rate comes on top.
+
+    Examples
+    --------
+    >>> round(driving_time_s(np.array([0.0, 0, 4, 4]), np.array([0.0, 10, 10, 0]),
+    ...                      speed_mps=0.56, turn_rate_dps=45.0), 2)   # two right angles
+    46.86
     """
     dx, dy = np.diff(x), np.diff(y)
-    moving = np.hypot(dx, dy) > 1e-9
-    heading = np.arctan2(dx[moving], dy[moving])
+    step = np.hypot(dx, dy)
+    moving = step > 1e-9
+    if not moving.any():
+        return 0.0
+    step = step[moving]
+    heading = np.arctan2(dy[moving], dx[moving])
     change = np.abs((np.diff(heading) + np.pi) % (2.0 * np.pi) - np.pi)
-    return float(change.sum() * track_width_m / speed_mps)
+    rate = math.radians(turn_rate_dps)
+    on_arc = (step[:-1] <= STEP_M + 1e-9) & (step[1:] <= STEP_M + 1e-9)
+    share = np.zeros(len(step))
+    arc_change = np.where(on_arc, change, 0.0)
+    share[:-1] += arc_change / 2.0
+    share[1:] += arc_change / 2.0
+    corners = float(np.where(on_arc, 0.0, change).sum()) / rate
+    return float(np.maximum(step / speed_mps, share / rate).sum()) + corners
+
+
+def turning_radius_m(vehicle: Vehicle) -> float:
+    """Radius of the vehicle's tightest arc [m]: its minimum, or half its track if it pivots.
+
+    Examples
+    --------
+    >>> from planner.vehicles import resolve_vehicle
+    >>> turning_radius_m(resolve_vehicle("hand_tractor")), turning_radius_m(
+    ...     resolve_vehicle("small_tractor"))
+    (0.35, 3.0)
+    """
+    if vehicle.min_turn_radius_m > 0.0:
+        return float(vehicle.min_turn_radius_m)
+    return float(vehicle.track_m) / 2.0
+
+
+def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -> TurnCurves:
+    """Plan the turns ``vehicle`` drives between the given ends: the right type per turn.
+
+    A vehicle that pivots (``min_turn_radius_m`` 0) takes :func:`pivot_turn`; one with a
+    radius takes :func:`reeds_shepp_turn` if it may reverse, else :func:`dubins_turn`, or
+    :func:`bulb_turn` where the lines are less than two radii apart.
+    """
+    radius = turning_radius_m(vehicle)
+    if vehicle.min_turn_radius_m <= 0.0:
+        return pivot_turn(
+            ends, track_m=vehicle.track_m, can_reverse=vehicle.can_reverse, step_m=step_m
+        )
+    if vehicle.can_reverse:
+        return reeds_shepp_turn(ends, radius_m=radius, step_m=step_m)
+    spacing = np.hypot(ends.x1 - ends.x0, ends.y1 - ends.y0)
+    narrow = spacing < 2.0 * radius - 1e-9
+    if not narrow.any():
+        return dubins_turn(ends, radius_m=radius, step_m=step_m)
+    if narrow.all():
+        return bulb_turn(ends, radius_m=radius, step_m=step_m)
+    wide = dubins_turn(_subset(ends, ~narrow), radius_m=radius, step_m=step_m)
+    bulbs = bulb_turn(_subset(ends, narrow), radius_m=radius, step_m=step_m)
+    return _merge(wide, bulbs, ~narrow)
+
+
+def _subset(ends: TurnEnds, keep: npt.NDArray[np.bool_]) -> TurnEnds:
+    return TurnEnds(
+        ends.x0[keep], ends.y0[keep], ends.yaw0[keep], ends.x1[keep], ends.y1[keep], ends.yaw1[keep]
+    )
+
+
+def _merge(a: TurnCurves, b: TurnCurves, from_a: npt.NDArray[np.bool_]) -> TurnCurves:
+    """Interleave two sets of turns: turn ``k`` from ``a`` where ``from_a[k]``, else ``b``."""
+    n = len(from_a)
+    size_a, size_b = np.diff(a.offsets), np.diff(b.offsets)
+    sizes = np.empty(n, dtype=np.int64)
+    sizes[from_a], sizes[~from_a] = size_a, size_b
+    offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
+    xy = np.empty((offsets[-1], 2))
+    owner = np.repeat(np.arange(n), sizes)
+    xy[from_a[owner]] = a.xy
+    xy[~from_a[owner]] = b.xy
+    length = np.empty(n)
+    turn = np.empty(n)
+    length[from_a], length[~from_a] = a.length_m, b.length_m
+    turn[from_a], turn[~from_a] = a.turn_rad, b.turn_rad
+    return TurnCurves(xy, offsets, length, turn, a.radius_m)

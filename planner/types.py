@@ -7,7 +7,7 @@ Local metric geometry stays inside the stage modules.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Literal
+from typing import Any, Literal
 
 from shapely import Polygon
 
@@ -144,8 +144,14 @@ class PlanStats:
     estimated_time_s: float
     planning_ms: float
     coverage_given_up_pp: float = 0.0
+    #: Working width of the implement [m]: what the coverage is measured with (R4).
+    implement_width_m: float | None = None
+    #: Implement width minus interval [m]: > 0 the passes overlap, < 0 strips are left.
+    overlap_m: float | None = None
+    #: The vehicle the plan is for: its preset and figures (product.md §3a).
+    vehicle: dict[str, Any] | None = None
 
-    def as_dict(self) -> dict[str, float | int]:
+    def as_dict(self) -> dict[str, Any]:
         """Return the figures as a plain dict, in declaration order."""
         return asdict(self)
 
@@ -168,6 +174,10 @@ class CoveragePlan:
         Distance between tillage lines [m].
     cells_lonlat : tuple of Polygon
         The cells the field was split into (one for a convex field), WGS84.
+    vehicle : Vehicle or None
+        The vehicle the plan is for (None for a plan read back from a file without one).
+    implement_width_m : float or None
+        Working width of the implement [m].
     """
 
     field_lonlat: Polygon
@@ -176,3 +186,5 @@ class CoveragePlan:
     stats: PlanStats
     interval_m: float
     cells_lonlat: tuple[Polygon, ...] = ()
+    vehicle: Vehicle | None = None
+    implement_width_m: float | None = None

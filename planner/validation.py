@@ -16,9 +16,10 @@ from shapely import Point, Polygon
 
 from planner.errors import InvalidFieldError, InvalidParameterError
 from planner.projection import UTM_LAT_RANGE_DEG, LocalFrame, geodesic_area_m2
-from planner.types import OBJECTIVES, Objective
+from planner.types import OBJECTIVES, PATTERNS, Objective, Pattern
 
 INTERVAL_RANGE_M = (0.2, 50.0)
+IMPLEMENT_WIDTH_RANGE_M = (0.1, 50.0)
 SPEED_RANGE_MPS = (0.05, 10.0)
 HEADLAND_PASSES_MAX = 5
 MIN_AREA_M2 = 1.0
@@ -125,6 +126,27 @@ def validate_interval(interval_m: Any) -> float:
             "interval_m", f"must be between {low:g} and {high:g} m, got {value:g}"
         )
     return value
+
+
+def validate_implement_width(implement_width_m: Any, interval_m: float) -> float:
+    """Return the implement's working width [m]: ``interval_m`` if None, else 0.1–50 m."""
+    if implement_width_m is None:
+        return float(interval_m)
+    value = _number("implement_width_m", implement_width_m)
+    low, high = IMPLEMENT_WIDTH_RANGE_M
+    if not (low <= value <= high):
+        raise InvalidParameterError(
+            "implement_width_m", f"must be between {low:g} and {high:g} m, got {value:g}"
+        )
+    return value
+
+
+def validate_pattern(pattern: Any) -> Pattern:
+    """Return ``pattern`` if it is one of :data:`~planner.types.PATTERNS`."""
+    for known in PATTERNS:
+        if pattern == known:
+            return known
+    raise InvalidParameterError("pattern", f"must be one of {', '.join(PATTERNS)}, got {pattern!r}")
 
 
 def validate_angle(angle_deg: Any) -> float | None:

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from app.cli.common import fail, plan_field_spec, read_field_file, write_output
+from app.cli.common import fail, plan_field_spec, read_field_file, read_json_file, write_output
 
 
 class OutputFormat(StrEnum):
@@ -31,6 +31,19 @@ class PatternChoice(StrEnum):
     boustrophedon = "boustrophedon"
     snake = "snake"
     spiral = "spiral"
+
+
+def parse_vehicle(text: str | None) -> str | dict[str, object] | None:
+    """Return a preset name as is, or the fields of a JSON vehicle file (``{"preset": …, …}``)."""
+    if text is None:
+        return None
+    path = Path(text)
+    if text.endswith(".json") or path.is_file():
+        document = read_json_file(path, what="--vehicle")
+        if not isinstance(document, dict):
+            fail(f"--vehicle: {path} must hold a JSON object of vehicle fields")
+        return document
+    return text
 
 
 class ObjectiveChoice(StrEnum):
@@ -95,10 +108,36 @@ def plan_command(
     headland: Annotated[
         int, typer.Option("--headland", help="Headland passes around the inside, 0–5.")
     ] = 0,
+    vehicle: Annotated[
+        str | None,
+        typer.Option(
+            "--vehicle",
+            metavar="PRESET|FILE.json",
+            help=(
+                "The machine: hand_tractor (default), paper_g1000, small_tractor, rover, or a "
+                'JSON file such as {"preset": "small_tractor", "min_turn_radius_m": 4}.'
+            ),
+        ),
+    ] = None,
+    implement_width: Annotated[
+        float | None,
+        typer.Option(
+            "--implement-width",
+            metavar="M",
+            help="Working width of the implement in metres; default: the interval.",
+        ),
+    ] = None,
     pattern: Annotated[
         PatternChoice,
-        typer.Option("--pattern", help="Lines back and forth, or rounds inward (spiral)."),
+        typer.Option(
+            "--pattern",
+            help="Lines back and forth, skipping lines (snake), or rounds inward (spiral).",
+        ),
     ] = PatternChoice.boustrophedon,
+    speed: Annotated[
+        float | None,
+        typer.Option("--speed", metavar="V", help="Working speed in m/s; default 0.56."),
+    ] = None,
     output_format: Annotated[
         OutputFormat, typer.Option("--format", help="Output format.")
     ] = OutputFormat.geojson,
@@ -120,7 +159,10 @@ def plan_command(
         angle_deg=angle,
         objective=objective.value,
         headland_passes=headland,
+        vehicle=parse_vehicle(vehicle),
+        implement_width_m=implement_width,
         pattern=pattern.value,
+        **({} if speed is None else {"speed_mps": speed}),
     )
     name = spec.name or field.stem
     text: str | bytes
@@ -149,7 +191,9 @@ def plan_command(
         f"area {s.area_m2:,.1f} m², path {s.path_length_m:,.1f} m "
         f"(lines {s.working_length_m:,.1f}, turns {s.turn_length_m:,.1f}, "
         f"transit {s.transit_length_m:,.1f}), heading {s.angle_deg:.1f}°, "
-        f"coverage {s.coverage_ratio:.1%}, about {s.estimated_time_s / 60:.1f} min, "
+        f"coverage {s.coverage_ratio:.1%} with a {plan.implement_width_m or plan.interval_m:g} m "
+        f"implement, vehicle {plan.vehicle.preset if plan.vehicle else '?'}, "
+        f"about {s.estimated_time_s / 60:.1f} min, "
         f"planned in {s.planning_ms:.1f} ms",
         err=True,
     )

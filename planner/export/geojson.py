@@ -17,7 +17,7 @@ from shapely import Polygon
 
 from planner.errors import InvalidFieldError
 from planner.fields import parse_field_geojson
-from planner.types import CoveragePlan, PathSegment, PlanStats, Waypoint
+from planner.types import CoveragePlan, PathSegment, PlanStats, Vehicle, Waypoint
 
 _ROLES = {"start", "line_start", "line_end", "turn", "headland", "finish"}
 _SEGMENT_KINDS = ("transit", "line", "turn", "headland", "round")
@@ -101,7 +101,13 @@ def plan_from_geojson(obj: Any) -> CoveragePlan:
         parse_field_geojson({**f, "properties": {}}).field_lonlat for f in by_kind.get("cell", [])
     )
     props = obj.get("properties") or {}
-    stats = PlanStats(**{k: props.get(k, 0) for k in PlanStats.__slots__})
+    optional = {"implement_width_m", "overlap_m", "vehicle"}
+    figures: dict[str, Any] = {
+        k: props.get(k, None if k in optional else 0) for k in PlanStats.__slots__
+    }
+    stats = PlanStats(**figures)
+    vehicle = _vehicle(props.get("vehicle"))
+    implement = props.get("implement_width_m")
     return CoveragePlan(
         field_lonlat=field_lonlat,
         waypoints=tuple(waypoints),
@@ -109,7 +115,19 @@ def plan_from_geojson(obj: Any) -> CoveragePlan:
         stats=stats,
         interval_m=float(props.get("interval_m", 0.0)),
         cells_lonlat=cells,
+        vehicle=vehicle,
+        implement_width_m=None if implement is None else float(implement),
     )
+
+
+def _vehicle(value: Any) -> Vehicle | None:
+    """Return the plan's vehicle from its figures, or None if the file has none."""
+    if not isinstance(value, Mapping):
+        return None
+    try:
+        return Vehicle(**{f: value[f] for f in Vehicle.__slots__})
+    except (KeyError, TypeError):
+        return None
 
 
 def _feature(geometry: dict[str, Any], properties: dict[str, Any]) -> dict[str, Any]:

@@ -9,6 +9,7 @@ layers. One geometry type per layer: each converts to a Shapefile with ``ogr2ogr
 
 from __future__ import annotations
 
+import json
 import tempfile
 from collections.abc import Sequence
 from functools import lru_cache
@@ -52,6 +53,11 @@ def plan_to_gpkg(plan: CoveragePlan, *, name: str) -> bytes:
     _no_fsync_for_scratch_files()
     stats = plan.stats.as_dict()
     del stats["planning_ms"]
+    # A column holds one value: the vehicle (a dict of figures) goes as its preset and JSON.
+    vehicle = stats.pop("vehicle", None)
+    if isinstance(vehicle, dict):
+        stats["vehicle"] = str(vehicle.get("preset"))
+        stats["vehicle_json"] = json.dumps(vehicle, sort_keys=True)
     field_attrs: dict[str, Any] = {"name": name, "interval_m": plan.interval_m, **stats}
     with tempfile.TemporaryDirectory(prefix="tillpath-gpkg-") as scratch:
         path = str(Path(scratch) / "plan.gpkg")

@@ -35,6 +35,7 @@ import { restoreLanguageChoice, switchLanguage, t, tapOrClick, tn } from "./i18n
 import { queueSave, registerServiceWorker, watchConnection } from "./offline.js";
 import { createMap, FIELD_STYLE, setUpGeoman } from "./basemap.js";
 import { drawPlan } from "./planlayer.js";
+import { fillVehicle, setUpVehicle, vehicleRequest } from "./vehicle.js";
 import { planTitle, setUpSavedPlans } from "./savedplans.js";
 import { forget, KEYS, readStored, store } from "./storage.js";
 import { goToCoordinates, setUpWalkControls } from "./walk.js";
@@ -251,7 +252,13 @@ function buildRequest() {
       return null;
     }
   }
+  const machine = vehicleRequest();
+  if (machine.error) {
+    showError(machine.error, machine.input);
+    return null;
+  }
   return {
+    ...machine,
     name: ui.planName.value.trim() || null,
     field,
     interval_m: inputs.interval_m.value,
@@ -453,6 +460,7 @@ async function openPlan(id, { quiet = false } = {}) {
     state.restoring = true;
     try {
       fillForm(ui, request, plan.name);
+      fillVehicle(request);
       fieldFromPolygon(polygonOf(request.field));
       placeMarker("start", request.start);
       placeMarker("finish", request.finish);
@@ -740,6 +748,7 @@ async function main() {
     onPlansChanged: () => state.saved.refresh(),
   });
   wireControls();
+  setUpVehicle(dataset.apiUrl);
   setPanelOpen(false);
   restoreDraft();
   if (state.signedIn) state.saved.refresh();

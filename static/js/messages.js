@@ -21,6 +21,9 @@ const INPUT_CONTROLS = {
   objective: "objective",
   headland_passes: "headland",
   speed_mps: "speed",
+  vehicle: "vehicle",
+  implement_width_m: "implement-width",
+  pattern: "pattern",
 };
 
 const $ = (id) => document.getElementById(id);

@@ -64,8 +64,9 @@ function waypointTooltip(props) {
 
 function waypointLayer(geojson) {
   // Start and finish have their own draggable pins; a number under a pin would only peek out.
+  // Turn waypoints are the driven curve, every half metre: the turn's line shows them.
   const points = (geojson?.features ?? []).filter(
-    (f) => kindOf(f) === "waypoint" && !["start", "finish"].includes(f.properties?.role),
+    (f) => kindOf(f) === "waypoint" && !["start", "finish", "turn"].includes(f.properties?.role),
   );
   const numbered = points.length <= MAX_NUMBERED_WAYPOINTS;
   // Thousands of dots draw fast on one canvas and slowly as thousands of SVG elements.

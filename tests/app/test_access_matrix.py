@@ -212,6 +212,8 @@ RULES: dict[tuple[str, str], Rule] = {
     ),
     # The field registry.
     ("GET", "/api/fields"): Rule("viewer", get("/api/fields")),
+    # Vehicle presets (issue 9): figures only, for any member.
+    ("GET", "/api/vehicles"): Rule("viewer", get("/api/vehicles")),
     ("POST", "/api/fields"): Rule(
         "planner",
         lambda o: (

@@ -129,7 +129,9 @@ def test_draw_field_set_start_finish_and_generate_shows_plan_summary(page: Page)
     assert plan["request"]["start"] is not None and plan["request"]["finish"] is not None
     assert plan["waypoints"][0]["role"] == "start" and plan["waypoints"][-1]["role"] == "finish"
     # The path is on the map: numbered waypoints (start and finish are pins) and arrows.
-    expect(page.locator(".waypoint")).to_have_count(plan["stats"]["waypoint_count"] - 2)
+    # Numbered markers for the line ends (the turns' half-metre points show as the turn line).
+    ends = [w for w in plan["waypoints"] if w["role"] not in ("start", "finish", "turn")]
+    expect(page.locator(".waypoint")).to_have_count(len(ends))
     expect(page.locator(".endpoint-start")).to_have_count(1)
     expect(page.locator(".endpoint-finish")).to_have_count(1)
     arrows = page.locator(".path-arrow span")
@@ -191,7 +193,9 @@ def test_gpx_download_parses_and_validates_against_gpx_1_1(page: Page, tmp_path:
     gpx = gpxpy.parse(path.read_text(encoding="utf-8"))
     assert len(gpx.routes) == 1
     points = gpx.routes[0].points
-    assert len(points) == saved["stats"]["waypoint_count"] == 2 * saved["stats"]["line_count"] + 2
+    assert len(points) == saved["stats"]["waypoint_count"]
+    # Line ends, start and finish; the hand tractor's pivots are "turn" points between them.
+    assert sum(p.type != "turn" for p in points) == 2 * saved["stats"]["line_count"] + 2
     assert (points[0].longitude, points[0].latitude) == pytest.approx(
         (saved["waypoints"][0]["lon"], saved["waypoints"][0]["lat"]), abs=1e-7
     )
@@ -239,7 +243,9 @@ def test_import_paper_field_shows_its_plan_figures(page: Page) -> None:
     lines = plan["stats"]["line_count"]
     assert lines in (4, 5)
     expect(figure(page, "Lines")).to_have_text(str(lines))
-    expect(figure(page, "Waypoints")).to_have_text(str(2 * lines + 2))
+    # Line ends, start and finish, and the hand tractor's pivots between the lines.
+    expect(figure(page, "Waypoints")).to_have_text(str(plan["stats"]["waypoint_count"]))
+    assert sum(w["role"] != "turn" for w in plan["waypoints"]) == 2 * lines + 2
     expect(figure(page, "Area")).to_have_text(re.compile(r"^30[23]\.\d m²"))
     assert plan["request"]["start"] == pytest.approx([115.29797264, -8.62652248])
     assert plan["request"]["finish"] == pytest.approx([115.29816889, -8.62652064])
@@ -315,7 +321,16 @@ def test_simulate_and_upload_track_are_enabled_once_the_plan_is_saved(page: Page
 
 
 def test_every_control_has_its_accessible_name(page: Page) -> None:
-    for label in ["Plan name", "Interval (m)", "Line angle (°)", "Objective", "Headland passes"]:
+    for label in [
+        "Plan name",
+        "Interval (m)",
+        "Line angle (°)",
+        "Objective",
+        "Headland passes",
+        "Vehicle",
+        "Implement width (m)",
+        "Pattern",
+    ]:
         expect(page.get_by_label(label, exact=True)).to_be_visible()
     for name in [
         "Draw field",

@@ -27,9 +27,11 @@ def test_plan_paper_field_as_gpx(tmp_path: Path) -> None:
     result = run("plan", str(PAPER_FIELD), "--angle", "1", "--format", "gpx", "-o", str(out))
     assert result.returncode == 0, result.stderr
     assert result.stdout == ""
-    assert "4 lines" in result.stderr and "10 waypoints" in result.stderr
+    assert "4 lines" in result.stderr and "vehicle hand_tractor" in result.stderr
     route = gpxpy.parse(out.read_text()).routes[0]
-    assert [p.type for p in route.points] == ["start"] + ["line_start", "line_end"] * 4 + ["finish"]
+    # The pivots between the lines are waypoints too (the driven curve, ≤ 0.5 m apart).
+    roles = [p.type for p in route.points if p.type != "turn"]
+    assert roles == ["start"] + ["line_start", "line_end"] * 4 + ["finish"]
     field = json.loads(PAPER_FIELD.read_text())
     start, finish = (f["geometry"]["coordinates"] for f in field["features"][1:])
     assert [route.points[0].longitude, route.points[0].latitude] == start
@@ -109,11 +111,68 @@ def test_bad_files_exit_2(tmp_path: Path) -> None:
     assert "point.geojson: holds no field boundary" in result.stderr
 
 
+def test_plan_takes_a_vehicle_preset_implement_width_pattern_and_speed(tmp_path: Path) -> None:
+    out = tmp_path / "plan.geojson"
+    result = run(
+        "plan",
+        str(PAPER_FIELD),
+        "--interval",
+        "4",
+        "--vehicle",
+        "small_tractor",
+        "--implement-width",
+        "5",
+        "--pattern",
+        "snake",
+        "--speed",
+        "1.2",
+        "-o",
+        str(out),
+    )
+    assert result.returncode == 0, result.stderr
+    properties = json.loads(out.read_text())["properties"]
+    assert properties["vehicle"]["preset"] == "small_tractor"
+    assert properties["implement_width_m"] == 5.0
+    assert properties["overlap_m"] == 1.0
+    assert "vehicle small_tractor" in result.stderr
+
+
+def test_plan_reads_a_vehicle_file_and_names_a_bad_field(tmp_path: Path) -> None:
+    vehicle = tmp_path / "tractor.json"
+    vehicle.write_text(json.dumps({"preset": "small_tractor", "min_turn_radius_m": 2.5}))
+    out = tmp_path / "plan.geojson"
+    result = run("plan", str(PAPER_FIELD), "--vehicle", str(vehicle), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert json.loads(out.read_text())["properties"]["vehicle"]["min_turn_radius_m"] == 2.5
+    vehicle.write_text(json.dumps({"preset": "small_tractor", "wheels": 4}))
+    result = run("plan", str(PAPER_FIELD), "--vehicle", str(vehicle))
+    assert result.returncode == 2
+    assert result.stderr.startswith("error: vehicle.wheels: is not a vehicle field")
+    assert "Traceback" not in result.stderr
+
+
+def test_plan_refuses_an_unknown_preset() -> None:
+    result = run("plan", str(PAPER_FIELD), "--vehicle", "tank")
+    assert result.returncode == 2
+    assert "error: vehicle: unknown preset 'tank'" in result.stderr
+
+
 def test_plan_spiral_writes_rounds_as_one_path(tmp_path: Path) -> None:
     out = tmp_path / "spiral.geojson"
-    result = run("plan", str(PAPER_FIELD), "--pattern", "spiral", "-o", str(out))
+    result = run(
+        "plan",
+        str(PAPER_FIELD),
+        "--pattern",
+        "spiral",
+        "--vehicle",
+        "small_tractor",
+        "-o",
+        str(out),
+    )
     assert result.returncode == 0, result.stderr
-    features = json.loads(out.read_text())["features"]
+    document = json.loads(out.read_text())
+    assert document["properties"]["vehicle"]["preset"] == "small_tractor"
+    features = document["features"]
     kinds = [f["properties"]["kind"] for f in features]
     assert kinds.count("round") >= 2
     segments = [f for f in features if f["properties"]["kind"] in ("round", "turn", "transit")]

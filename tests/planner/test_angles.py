@@ -18,11 +18,25 @@ from planner.heading_coverage import convex_coverage
 from planner.lines import line_positions, to_sweep
 from planner.projection import field_frame
 from planner.types import CoveragePlan
-from tests.planner.test_pipeline import convex_fields
+from tests.planner.plan_checks import TINY_VEHICLE
+from tests.planner.test_pipeline import ESTIMATE_ERROR, convex_fields, plan_or_too_small
 
 SETTINGS = settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 #: Rounding of the reported figures (coverage to 1e-6, given up to 1e-4 pp).
 ROUNDING = 2e-6
+#: A vehicle whose body hardly matters: the search scores unfitted lines (it does not see the
+#: pull-back of line ends that a long body needs; see fitting_slack), so its rule is tested
+#: where the fitting changes little.
+POINT_VEHICLE = {**TINY_VEHICLE, "length_m": 0.1}
+
+
+def fitting_slack(field: shapely.Polygon, interval: float) -> float:
+    """Coverage the search cannot see: it scores unfitted lines, plans pull their ends back.
+
+    The 0.1 m × 0.1 m vehicle's driven turns pull each line end back a little, and a line whose turn
+    cannot reach a sharp corner is left out; two intervals squared of the field bound both.
+    """
+    return 2.0 * interval * interval / float(field_frame(field).to_local(field).area)
 
 
 def best_coverage(plan: CoveragePlan) -> float:
@@ -62,15 +76,23 @@ def test_convex_coverage_equals_covered_area_at_every_heading(
 def test_chosen_heading_covers_within_slack_of_every_candidate(job: tuple) -> None:
     """R5: against every candidate (edge directions, the 1° sweep), as fixed-angle plans."""
     field, interval, start, finish = job
-    kwargs = {"interval_m": interval, "start_lonlat": start, "finish_lonlat": finish}
-    plan = plan_coverage(field, **kwargs)
+    kwargs = {
+        "interval_m": interval,
+        "start_lonlat": start,
+        "finish_lonlat": finish,
+        "vehicle": POINT_VEHICLE,
+    }
+    plan = plan_or_too_small(field, **kwargs)
+    if plan is None:
+        return
+    slack = fitting_slack(field, interval)
     ring = np.asarray(field_frame(field).to_local(field).exterior.coords)[:-1]
     covers = [
         plan_coverage(field, angle_deg=float(h), **kwargs).stats.coverage_ratio
         for h in angles.candidate_headings(ring)
     ]
-    assert max(covers) <= best_coverage(plan) + ROUNDING
-    assert plan.stats.coverage_ratio >= max(covers) - angles.COVERAGE_SLACK - ROUNDING
+    assert max(covers) <= best_coverage(plan) + slack + ESTIMATE_ERROR + ROUNDING
+    assert plan.stats.coverage_ratio >= max(covers) - angles.COVERAGE_SLACK - slack - ROUNDING
     assert 0.0 <= plan.stats.coverage_given_up_pp <= 100 * angles.COVERAGE_SLACK + 1e-6
 
 
@@ -79,13 +101,23 @@ def test_chosen_heading_covers_within_slack_of_every_candidate(job: tuple) -> No
 def test_no_nearby_tenth_of_a_degree_keeping_the_rule_is_shorter(job: tuple) -> None:
     """The local refinement: within 0.9° on the 0.1° grid, nothing is 0.05 % shorter."""
     field, interval, start, finish = job
-    kwargs = {"interval_m": interval, "start_lonlat": start, "finish_lonlat": finish}
-    plan = plan_coverage(field, **kwargs)
+    kwargs = {
+        "interval_m": interval,
+        "start_lonlat": start,
+        "finish_lonlat": finish,
+        "vehicle": POINT_VEHICLE,
+    }
+    plan = plan_or_too_small(field, **kwargs)
+    if plan is None:
+        return
+    slack = fitting_slack(field, interval)
     grid = round(plan.stats.angle_deg, 1)
     for step in range(-9, 10):
         near = plan_coverage(field, angle_deg=(grid + step / 10) % 180.0, **kwargs)
-        if near.stats.coverage_ratio >= best_coverage(plan) - angles.COVERAGE_SLACK + 1e-5:
-            assert plan.stats.path_length_m <= near.stats.path_length_m * 1.0005 + 1e-3
+        if near.stats.coverage_ratio >= best_coverage(plan) - angles.COVERAGE_SLACK + slack:
+            # Driven turns and pulled-back ends: up to ~0.5 m per line (test_pipeline).
+            lines = max(plan.stats.line_count, near.stats.line_count)
+            assert plan.stats.path_length_m <= near.stats.path_length_m * 1.0005 + 0.5 * lines
 
 
 @pytest.mark.parametrize("interval_m", [1.0, 1.5, 2.0, 2.5, 4.0])

@@ -17,8 +17,10 @@ from planner.types import CoveragePlan
 from tests.conftest import field_from_local
 from tests.planner.plan_checks import (
     SPACING_TOLERANCE_M,
+    assert_body_inside,
     assert_figures_add_up,
     assert_inside,
+    assert_turns_drivable,
     local_segments,
     reference_coverage,
 )
@@ -61,13 +63,24 @@ def plan_or_too_narrow(job: tuple) -> CoveragePlan | None:
             headland_passes=passes,
         )
     except ValueError as error:
-        # A field narrower than its headland passes is refused, with that reason.
-        assert str(error).startswith("headland_passes: the field is too narrow")
+        # A field narrower than its headland passes is refused, with that reason; so is one
+        # with no room anywhere for the hand tractor to turn.
+        if str(error).startswith("vehicle:"):
+            local = field_frame(field).to_local(field)
+            assert local.buffer(-(0.85 / 2 + 0.7 + interval)).is_empty, error
+            return None
+        assert str(error).startswith("headland_passes: the field is too narrow"), error
         return None
 
 
 def assert_spacing_per_cell(plan: CoveragePlan) -> None:
-    """R2 and R3 within each cell: lines ``interval`` apart, outer ones d/2 inside the cell."""
+    """R2 and R3 within each cell: lines ``interval`` apart, outer ones inside the cell.
+
+    Cells are pieces of the machine area (the field less half the vehicle's width), so the
+    outer lines lie at least a quarter interval inside them (half an interval inside the
+    field when the vehicle is narrower than the interval); lines the turns cannot reach
+    are left out from the sides, so the rest stay an interval apart.
+    """
     frame = field_frame(plan.field_lonlat)
     d = plan.interval_m
     theta = math.radians(plan.stats.angle_deg)
@@ -85,13 +98,13 @@ def assert_spacing_per_cell(plan: CoveragePlan) -> None:
         offsets = np.sort(owner[i])
         cell_across = across(np.asarray(cell.exterior.coords))
         low, high = float(cell_across.min()), float(cell_across.max())
-        assert len(offsets) >= 1, "a cell without lines"
-        if high - low <= d:
+        if len(offsets) == 0:
+            continue  # the vehicle's turns reach no line of this cell
+        if high - low <= d / 2:
             assert len(offsets) == 1
-            assert abs(offsets[0] - (low + high) / 2) < SPACING_TOLERANCE_M
             continue
-        assert abs(offsets[0] - (low + d / 2)) < SPACING_TOLERANCE_M
-        assert abs(offsets[-1] - (high - d / 2)) < SPACING_TOLERANCE_M
+        assert offsets[0] >= low + d / 4 - SPACING_TOLERANCE_M
+        assert offsets[-1] <= high - d / 4 + SPACING_TOLERANCE_M
         gaps = np.diff(offsets)
         assert (gaps <= d + SPACING_TOLERANCE_M).all(), "lines farther apart than the interval"
         off = np.nonzero(np.abs(gaps - d) > SPACING_TOLERANCE_M)[0]
@@ -106,6 +119,8 @@ def test_random_fields_with_holes_stay_inside_r1_and_keep_spacing_per_cell_r2(jo
         return
     _, _, start, finish, passes = job
     assert_inside(plan)
+    assert_body_inside(plan)
+    assert_turns_drivable(plan)
     assert_spacing_per_cell(plan)
     assert_figures_add_up(plan)
     assert len(local_segments(plan, "headland")) >= passes
@@ -117,7 +132,9 @@ def test_random_fields_with_holes_stay_inside_r1_and_keep_spacing_per_cell_r2(jo
         # Coverage is reported conservatively: footprints count in their own cell (headland
         # passes in their band), so it never exceeds shapely's figure, and it is close.
         reference = reference_coverage(plan)
-        assert plan.stats.coverage_ratio <= reference + 1e-4
+        # (The reference buffers each headland round as a closed line with flat caps, which
+        # leaves a notch where it starts; the planner buffers the ring whole.)
+        assert plan.stats.coverage_ratio <= reference + 5e-4
         assert plan.stats.coverage_ratio >= reference - 0.05
 
 
@@ -151,7 +168,11 @@ def test_field_with_hole_goes_round_the_hut(field_with_hole: Polygon) -> None:
     assert len(plan.cells_lonlat) >= 2
     # One headland round along the boundary and one round the hut.
     assert len(local_segments(plan, "headland")) == 2
-    assert plan.stats.coverage_ratio > 0.97
+    assert_body_inside(plan)
+    # A hand tractor rounds the headland's corners with its pivots (0.35 m) and its lines
+    # stop where it can turn on the headland: coverage is measured, and high.
+    assert plan.stats.coverage_ratio == pytest.approx(reference_coverage(plan), abs=0.01)
+    assert plan.stats.coverage_ratio > 0.94
 
 
 def test_turn_round_a_notch_follows_the_boundary() -> None:
@@ -163,14 +184,17 @@ def test_turn_round_a_notch_follows_the_boundary() -> None:
     plan = plan_coverage(field, interval_m=4.0, angle_deg=0.0)
     assert len(plan.cells_lonlat) == 1  # the notch does not turn back across the sweep
     assert_inside(plan)
+    assert_body_inside(plan)
+    # The hand tractor cannot pivot round the notch's tip: the two lines beside it end below
+    # the tip, far enough for the pivot and half the tractor, and the turn passes under it.
     frame = field_frame(field)
-    bends = [
-        np.asarray(turn.coords)[1:-1]
-        for turn in local_segments(plan, "turn")
-        if len(turn.coords) > 2
-    ]
-    assert len(bends) == 1
-    # The bend is the notch's tip: of the vertices above the centre, the lowest.
     field_local = frame.to_local(field)
     tip = min(np.asarray(field_local.exterior.coords), key=lambda p: p[1] if p[1] > 0 else 1e9)
-    assert np.allclose(bends[0], [tip], atol=1e-3)
+    under = [
+        np.asarray(turn.coords)
+        for turn in local_segments(plan, "turn")
+        if abs(np.asarray(turn.coords)[:, 0].mean() - tip[0]) < 2.5
+        and np.asarray(turn.coords)[:, 1].mean() > 0
+    ]
+    assert len(under) == 1
+    assert under[0][:, 1].max() <= tip[1] - 0.85 / 2 + 1e-3

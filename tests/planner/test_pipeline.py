@@ -12,14 +12,18 @@ from hypothesis import strategies as st
 from shapely import Polygon
 
 from planner import parse_field_geojson, plan_coverage
+from planner.errors import InvalidParameterError
 from planner.ordering import ordered_line_ends
 from planner.projection import field_frame, local_frame
 from planner.types import CoveragePlan
 from tests.conftest import field_from_local
 from tests.planner.plan_checks import (
+    TINY_VEHICLE,
+    assert_body_inside,
     assert_figures_add_up,
     assert_inside,
     assert_spacing_and_edges,
+    assert_turns_drivable,
     line_offsets,
     local_segments,
     reference_coverage,
@@ -38,13 +42,16 @@ def test_paper_field_along_its_rows_gives_four_lines_and_eight_line_waypoints(
         finish_lonlat=spec.finish_lonlat,
         angle_deg=1.0,
     )
-    roles = [w.role for w in plan.waypoints]
+    roles = [w.role for w in plan.waypoints if w.role != "turn"]
     assert roles == ["start"] + ["line_start", "line_end"] * 4 + ["finish"]
     assert plan.stats.line_count == 4
+    assert plan.vehicle is not None and plan.vehicle.preset == "hand_tractor"
     assert (plan.waypoints[0].lon, plan.waypoints[0].lat) == spec.start_lonlat
     assert (plan.waypoints[-1].lon, plan.waypoints[-1].lat) == spec.finish_lonlat
     assert plan.stats.area_m2 == pytest.approx(302.65, abs=0.01)
     assert_inside(plan)
+    assert_body_inside(plan)
+    assert_turns_drivable(plan)
     assert_spacing_and_edges(plan)
     assert_figures_add_up(plan)
 
@@ -59,10 +66,12 @@ def test_paper_field_searched_puts_coverage_first(paper_geojson: dict) -> None:
     }
     plan = plan_coverage(spec.field_lonlat, **kwargs)
     rows = plan_coverage(spec.field_lonlat, angle_deg=1.0, **kwargs)
-    roles = [w.role for w in plan.waypoints]
+    roles = [w.role for w in plan.waypoints if w.role != "turn"]  # the pivots between lines
     assert roles == ["start"] + ["line_start", "line_end"] * plan.stats.line_count + ["finish"]
+    # The best coverage reported is the best of the headings planned in full; others are
+    # known by the search's estimate, to within a few thousandths of a point here.
     best = plan.stats.coverage_ratio + plan.stats.coverage_given_up_pp / 100.0
-    assert best >= rows.stats.coverage_ratio - 1e-6
+    assert best >= rows.stats.coverage_ratio - 1e-4
     assert plan.stats.coverage_given_up_pp <= 0.2 + 1e-9
     assert_inside(plan)
     assert_spacing_and_edges(plan)
@@ -101,6 +110,22 @@ def convex_fields(draw: st.DrawFn) -> tuple[Polygon, float, tuple | None, tuple 
     return field, interval, point(), point()
 
 
+def plan_or_too_small(field: Polygon, **options: object) -> CoveragePlan | None:
+    """Plan with the default vehicle; None if the field is too small for it, and it says so.
+
+    A hand tractor (0.85 m wide, pivoting 0.35 m about a wheel) refuses only fields with no
+    room for its body, or too narrow across the lines for one pivot turn.
+    """
+    try:
+        return plan_coverage(field, **options)  # type: ignore[arg-type]
+    except InvalidParameterError as error:
+        assert error.input_name == "vehicle", error
+        field_local = field_frame(field).to_local(field)
+        room = field_local.buffer(-(0.85 / 2 + 0.7 + float(options["interval_m"])))  # type: ignore[arg-type]
+        assert room.is_empty, f"{error} on a field with room to turn"
+        return None
+
+
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
@@ -108,9 +133,13 @@ SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[Healt
 @given(job=convex_fields())
 def test_random_convex_fields_satisfy_r1_r2_r3_r4(job: tuple) -> None:
     field, interval, start, finish = job
-    plan = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    plan = plan_or_too_small(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    if plan is None:
+        return
     assert_inside(plan)
-    assert_spacing_and_edges(plan)
+    assert_body_inside(plan)
+    assert_turns_drivable(plan)
+    assert_spacing_and_edges(plan, exact_edges=False)
     assert_figures_add_up(plan)
     assert plan.stats.coverage_ratio == pytest.approx(reference_coverage(plan), abs=2e-4)
     roles = [w.role for w in plan.waypoints]
@@ -122,8 +151,11 @@ def test_random_convex_fields_satisfy_r1_r2_r3_r4(job: tuple) -> None:
 @given(job=convex_fields())
 def test_same_request_same_plan(job: tuple) -> None:
     field, interval, start, finish = job
-    first = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
-    again = plan_coverage(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    first = plan_or_too_small(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    again = plan_or_too_small(field, interval_m=interval, start_lonlat=start, finish_lonlat=finish)
+    if first is None or again is None:
+        assert first is again
+        return
     assert first.waypoints == again.waypoints
     assert first.segments == again.segments
     assert first.stats.as_dict() | {"planning_ms": 0} == again.stats.as_dict() | {"planning_ms": 0}
@@ -169,9 +201,16 @@ def test_chosen_order_is_never_longer_than_any_of_the_four_variants(
     job: tuple, angle: float
 ) -> None:
     field, interval, start, finish = job
-    plan = plan_coverage(
-        field, interval_m=interval, start_lonlat=start, finish_lonlat=finish, angle_deg=angle
+    plan = plan_or_too_small(
+        field,
+        interval_m=interval,
+        start_lonlat=start,
+        finish_lonlat=finish,
+        angle_deg=angle,
+        vehicle=TINY_VEHICLE,
     )
+    if plan is None:
+        return
     assert plan.stats.angle_deg == pytest.approx(angle, abs=1e-6)
     # The plan's start and finish are its given points rounded to 1e-9° (0.1 mm).
     start = (plan.waypoints[0].lon, plan.waypoints[0].lat) if start else None
@@ -180,10 +219,16 @@ def test_chosen_order_is_never_longer_than_any_of_the_four_variants(
     # Measure the chosen route from the same rounded waypoints as the variants.
     frame = field_frame(field)
     x, y = frame.to_local_xy([w.lon for w in plan.waypoints], [w.lat for w in plan.waypoints])
+    assert float(np.sum(np.hypot(np.diff(x), np.diff(y)))) == pytest.approx(
+        plan.stats.path_length_m, abs=1e-3 + 2e-4 * len(x)
+    )
+    # The order is chosen on straight moves between the line ends, before the ends are
+    # pulled back for the turns (by at most the vehicle's size at each end): measure it so.
+    ends = [w for w in plan.waypoints if w.role != "turn"]
+    x, y = frame.to_local_xy([w.lon for w in ends], [w.lat for w in ends])
     chosen = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
-    assert chosen == pytest.approx(plan.stats.path_length_m, abs=1e-3 + 2e-4 * len(x))
-    # Each waypoint is rounded to 0.1 mm, so lengths measured from them carry that noise.
-    assert chosen <= min(variants) + 1e-4 * len(x)
+    pull_back_m = 0.2 * plan.stats.line_count
+    assert chosen <= min(variants) + 1e-4 * len(x) + pull_back_m
 
 
 @SETTINGS
@@ -193,8 +238,11 @@ def test_angle_search_beats_every_candidate_angle(job: tuple, angles: list[int])
     shorter (or, for fewest_lines, has fewer lines); none covers more than the best reported.
     """
     field, interval, start, finish = job
-    kwargs = {"interval_m": interval, "start_lonlat": start, "finish_lonlat": finish}
-    best = plan_coverage(field, **kwargs)
+    tiny = {"vehicle": TINY_VEHICLE}
+    kwargs = {"interval_m": interval, "start_lonlat": start, "finish_lonlat": finish, **tiny}
+    best = plan_or_too_small(field, **kwargs)
+    if best is None:
+        return
     fewest = plan_coverage(field, objective="fewest_lines", **kwargs)
     # Every edge direction is a candidate, so the minimum-width direction is among them.
     frame = field_frame(field)
@@ -202,14 +250,28 @@ def test_angle_search_beats_every_candidate_angle(job: tuple, angles: list[int])
     edges = np.degrees(np.arctan2(*np.diff(ring, axis=0).T)) % 180.0
     for angle in [*angles, *edges.tolist()]:
         fixed = plan_coverage(field, angle_deg=angle % 180.0, **kwargs)
+        # Headings are scored on straight turns between unfitted ends; a 0.1 m vehicle's
+        # driven turns and pulled-back ends change a path by up to ~0.5 m per line, and a line
+        # its turn cannot reach at a sharp corner is left out. Coverage is measured on the
+        # fitted lines, the heading search's coverage rule on the unfitted ones.
+        lines = max(best.stats.line_count, fixed.stats.line_count)
+        slack = 1e-3 + 0.5 * lines + 2.0 * interval
+        # ... and the best coverage it reports is its estimate's, good to ESTIMATE_ERROR.
+        cover_slack = 2.0 * interval * interval / float(frame.to_local(field).area)
+        cover_slack += ESTIMATE_ERROR
         cover = fixed.stats.coverage_ratio
         for plan in (best, fewest):
-            top = plan.stats.coverage_ratio + plan.stats.coverage_given_up_pp / 100.0
-            assert cover <= top + 2e-6, "a candidate covers more than the best reported"
+            assert cover <= _best_coverage(plan) + cover_slack + 2e-6
         if cover >= _best_coverage(best) - 0.002 + 1e-5:
-            assert best.stats.path_length_m <= fixed.stats.path_length_m + 1e-3
+            assert best.stats.path_length_m <= fixed.stats.path_length_m + slack
         if cover >= _best_coverage(fewest) - 0.002 + 1e-5:
-            assert fewest.stats.line_count <= fixed.stats.line_count
+            assert fewest.stats.line_count <= fixed.stats.line_count + 1
+
+
+#: How far the search's estimate of the best heading's coverage may fall short of what a
+#: fixed-heading plan really covers: its closed form sees straight lines, less an allowance
+#: for fitting them (planner.line_ends.fitting_loss_m2); 0.1 percentage point.
+ESTIMATE_ERROR = 0.001
 
 
 def _best_coverage(plan: CoveragePlan) -> float:
@@ -234,7 +296,9 @@ def test_square_field_lines_touch_both_sides(square_field: Polygon) -> None:
     offsets, low, high = line_offsets(plan)
     assert len(offsets) == 10
     assert np.allclose(np.diff(offsets), 4.0, atol=1e-3)
-    assert plan.stats.coverage_ratio == pytest.approx(1.0, abs=1e-6)
+    # Side to side the footprints meet the bund; the ends stop where the pivots fit.
+    assert plan.stats.coverage_ratio == pytest.approx(reference_coverage(plan), abs=1e-4)
+    assert plan.stats.coverage_ratio > 0.95
 
 
 @pytest.mark.parametrize("passes", [1, 2, 3])

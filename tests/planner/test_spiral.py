@@ -16,7 +16,7 @@ from planner.export import plan_to_geojson
 from planner.projection import field_frame
 from planner.types import CoveragePlan
 from tests.conftest import field_from_local
-from tests.planner.plan_checks import TOLERANCE_M, local_segments
+from tests.planner.plan_checks import TINY_VEHICLE, TOLERANCE_M, local_segments
 from tests.planner.random_fields import fields_with_holes
 
 SETTINGS = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -97,9 +97,13 @@ def test_random_fields_with_holes_give_one_continuous_path_inside(
     field: Polygon, frac: float
 ) -> None:
     interval = float(np.clip(frac * math.sqrt(field.area), 0.2, 50.0))
-    plan = plan_coverage(field_from_local(field), interval_m=interval, pattern="spiral")
+    plan = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
+    )
     assert_inside_and_continuous(plan)
-    again = plan_coverage(field_from_local(field), interval_m=interval, pattern="spiral")
+    again = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
+    )
     assert again.waypoints == plan.waypoints  # R7
     assert plan.stats.coverage_ratio <= spiral_coverage(plan) + 1e-4
 
@@ -119,7 +123,9 @@ def test_convex_fields_are_covered_95_percent(
     if hull.geom_type != "Polygon" or hull.area < 100.0:
         hull = shapely.box(0, 0, 80, 50)
     interval = float(np.clip(frac * math.sqrt(hull.area), 0.2, 50.0))
-    plan = plan_coverage(field_from_local(hull), interval_m=interval, pattern="spiral")
+    plan = plan_coverage(
+        field_from_local(hull), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
+    )
     assert_inside_and_continuous(plan)
     assert spiral_coverage(plan) >= 0.95
 

@@ -1,0 +1,406 @@
+"""Line ends where the turn fits: the paper's Algorithm 1 pull-back, generalised to a vehicle.
+
+The paper pulls each line end back from the bund so that the tractor can pivot without
+leaving the field. Here the whole machine must stay in (R1): the path buffered by half the
+vehicle's width lies inside the field, so the path itself lies inside the *machine area*, the
+field eroded by that half-width. A turn joins the end of one line to the start of the next; it
+depends only on where the two ends are relative to each other, so pulling both ends back
+along their lines by the same distance slides the turn back unchanged. For every turn that
+distance is the smallest that brings the whole driven curve inside the machine area, read
+off the area's upper (or lower) chain in the sweep frame, in closed form for all turns at once.
+A turn that cannot fit at any distance (it swings out beyond the side of the area) or a line
+that the pull-back eats up removes that line, and the cell is fitted again.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+import shapely
+from shapely import MultiPolygon, Polygon
+
+from planner.coverage import Chains, convex_chains
+from planner.errors import InvalidParameterError
+from planner.lines import line_positions, to_sweep
+from planner.ordering import order_boustrophedon, order_snake
+from planner.turns import TurnCurves, TurnEnds, turning_radius_m, vehicle_turns
+from planner.types import Pattern, Vehicle
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: Points this close outside the machine area count as inside (R1 allows 1 cm) [m].
+FIT_TOLERANCE_M = 1e-6
+#: Pieces of the machine area smaller than this share of the largest are left out.
+MIN_PART_SHARE = 0.01
+#: Refits of a cell at most (each removes at least one line; the first half from the sides).
+_MAX_ROUNDS = 40
+
+
+@dataclass(frozen=True, slots=True)
+class FittedLines:
+    """A cell's lines in driving order, with their ends pulled back and the turns between them.
+
+    Everything is in the cell's sweep frame [m]: ``u`` across the lines, ``v`` along them.
+
+    Attributes
+    ----------
+    u, v_start, v_end : ndarray, shape (n,)
+        Each driven line, from ``v_start`` to ``v_end``.
+    index : ndarray of int, shape (n,)
+        Position of each driven line in the input (left to right).
+    turns : TurnCurves
+        The ``n - 1`` turns, sweep frame.
+    """
+
+    u: FloatArray
+    v_start: FloatArray
+    v_end: FloatArray
+    index: IntArray
+    turns: TurnCurves
+
+
+def fit_lines(
+    u: FloatArray,
+    v_start: FloatArray,
+    v_end: FloatArray,
+    index: IntArray,
+    *,
+    machine: Chains,
+    vehicle: Vehicle,
+) -> FittedLines:
+    """Pull line ends back until every turn between consecutive lines fits the machine area.
+
+    Parameters
+    ----------
+    u, v_start, v_end : ndarray, shape (n,)
+        The lines in driving order (directions alternate), sweep frame [m]; their ends lie
+        on the machine area's chains.
+    index : ndarray of int, shape (n,)
+        Each line's left-to-right index, carried through.
+    machine : Chains
+        The machine area of the cell (the field eroded by half the vehicle's width), convex
+        or sweep-monotone, in the same sweep frame.
+    vehicle : Vehicle
+
+    Returns
+    -------
+    FittedLines
+        Possibly fewer lines: those the turns cannot reach are left out.
+
+    Examples
+    --------
+    A 20 m × 30 m machine area, hand tractor, lines 4 m apart: each end moves back by the
+    pivot's reach, half the track.
+
+    >>> from planner.coverage import convex_chains
+    >>> from planner.vehicles import resolve_vehicle
+    >>> area = convex_chains(np.array([0.0, 20, 20, 0]), np.array([0.0, 0, 30, 30]))
+    >>> u = np.array([2.0, 6.0, 10.0])
+    >>> fit = fit_lines(u, np.array([0.0, 30, 0]), np.array([30.0, 0, 30]), np.arange(3),
+    ...                 machine=area, vehicle=resolve_vehicle("hand_tractor"))
+    >>> fit.v_start.round(3).tolist(), fit.v_end.round(3).tolist()
+    ([0.0, 29.65, 0.35], [29.65, 0.35, 30.0])
+    """
+    keep = np.ones(len(u), dtype=bool)
+    for round_ in range(_MAX_ROUNDS):
+        k = np.nonzero(keep)[0]
+        fit, drop = _fit_once(u[k], v_start[k], v_end[k], index[k], machine, vehicle)
+        if not drop.any():
+            return fit
+        if round_ < _MAX_ROUNDS // 2:
+            # Lines drop from the sides inwards, so the rest stay an interval apart (R2):
+            # a problem left of the middle drops the leftmost line, right of it the rightmost.
+            uk = u[k]
+            middle = float(np.median(uk))
+            side_drop = np.zeros(len(k), dtype=bool)
+            if (drop & (uk <= middle)).any():
+                side_drop[int(np.argmin(uk))] = True
+            if (drop & (uk > middle)).any():
+                side_drop[int(np.argmax(uk))] = True
+            drop = side_drop
+        keep[k[drop]] = False
+    k = np.nonzero(keep)[0]
+    fit, _ = _fit_once(u[k[:1]], v_start[k[:1]], v_end[k[:1]], index[k[:1]], machine, vehicle)
+    return fit
+
+
+def _fit_once(
+    u: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    index: IntArray,
+    machine: Chains,
+    vehicle: Vehicle,
+) -> tuple[FittedLines, BoolArray]:
+    """One fitting round: the fitted lines, and which lines to drop before the next."""
+    n = len(u)
+    up = b >= a
+    if n < 2:
+        empty = vehicle_turns(_no_ends(), vehicle)
+        return FittedLines(u, a, b, index, empty), np.zeros(n, dtype=bool)
+    yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
+    ends = TurnEnds(u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:])
+    curves = vehicle_turns(ends, vehicle)
+    owner = np.repeat(np.arange(n - 1), np.diff(curves.offsets))
+    top = up[:-1]
+    pu, pv = curves.xy[:, 0], curves.xy[:, 1]
+    hi = np.interp(pu, machine.hi_u, machine.hi_v)
+    lo = np.interp(pu, machine.lo_u, machine.lo_v)
+    beyond = (pu < machine.u_min - FIT_TOLERANCE_M) | (pu > machine.u_max + FIT_TOLERANCE_M)
+    need = np.where(top[owner], pv - hi, lo - pv)
+    need = np.where(beyond, np.inf, need)
+    delta = np.zeros(n - 1)
+    np.maximum.at(delta, owner, need)
+    # A chain vertex between two points of a curve (a spike of the boundary) counts too.
+    seg_turn, seg_need = _chain_vertices_under(pu, pv, owner, top, machine)
+    np.maximum.at(delta, seg_turn, seg_need)
+    reachable = np.isfinite(delta)
+    delta = np.where(reachable, delta, 0.0)
+    shift = np.where(top, -delta, delta)  # along v: down at the top, up at the bottom
+    moved = pv + shift[owner]
+    clash = np.where(top[owner], lo - moved, moved - hi) > FIT_TOLERANCE_M
+    fits = reachable.copy()
+    np.logical_and.at(fits, owner, ~clash)
+    seg_turn, seg_need = _chain_vertices_under(pu, moved, owner, ~top, machine)
+    np.logical_and.at(fits, seg_turn, seg_need <= FIT_TOLERANCE_M)
+    a2, b2 = a.copy(), b.copy()
+    b2[:-1] += shift
+    a2[1:] += shift
+    length = np.where(up, b2 - a2, a2 - b2)
+    drop = length < 0.0
+    # A turn that cannot fit drops the outer of its two lines (nearer the side of the area),
+    # so that the lines left stay an interval apart.
+    inset = np.minimum(u - machine.u_min, machine.u_max - u)
+    for t in np.nonzero(~fits)[0].tolist():
+        outer = t if inset[t] <= inset[t + 1] else t + 1
+        drop[outer] = True
+    if drop.all():  # one line needs no turn: keep the longest
+        drop[int(np.argmax(np.abs(b - a)))] = False
+    xy = np.stack([pu, moved], axis=1)
+    turns = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
+    return FittedLines(u, a2, b2, index, turns), drop
+
+
+def _chain_vertices_under(
+    pu: FloatArray, pv: FloatArray, owner: IntArray, top: BoolArray, machine: Chains
+) -> tuple[IntArray, FloatArray]:
+    """How far each curve passes beyond the chain vertices that lie between its points.
+
+    For a turn at the top (``top[turn]``) the upper chain's vertices, else the lower's: at
+    every chain vertex within the ``u``-span of a step of the curve, the curve's ``v`` there
+    minus the vertex's (upper chain), or the reverse (lower chain).
+
+    Returns
+    -------
+    turn : ndarray of int
+        The turn of each such vertex crossing.
+    need : ndarray
+        How far beyond the chain the curve passes there [m] (negative: inside).
+    """
+    same = owner[1:] == owner[:-1]
+    i = np.nonzero(same)[0]
+    ua, ub, va, vb = pu[i], pu[i + 1], pv[i], pv[i + 1]
+    turn = owner[i]
+    at_top = top[turn]
+    turns_out: list[IntArray] = []
+    needs: list[FloatArray] = []
+    for chain_top, cu, cv in (
+        (True, machine.hi_u, machine.hi_v),
+        (False, machine.lo_u, machine.lo_v),
+    ):
+        pick = at_top == chain_top
+        lo_u, hi_u = np.minimum(ua[pick], ub[pick]), np.maximum(ua[pick], ub[pick])
+        first = np.searchsorted(cu, lo_u, side="right")
+        stop = np.searchsorted(cu, hi_u, side="left")
+        count = np.maximum(stop - first, 0)
+        if not count.any():
+            continue
+        step = np.repeat(np.arange(len(count)), count)
+        vertex = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        vertex += first[step]
+        a_u, b_u = ua[pick][step], ub[pick][step]
+        a_v, b_v = va[pick][step], vb[pick][step]
+        t = (cu[vertex] - a_u) / np.where(b_u != a_u, b_u - a_u, 1.0)
+        curve_v = a_v + t * (b_v - a_v)
+        gap = curve_v - cv[vertex] if chain_top else cv[vertex] - curve_v
+        turns_out.append(turn[pick][step])
+        needs.append(gap)
+    if not needs:
+        return np.zeros(0, dtype=np.int64), np.zeros(0)
+    return np.concatenate(turns_out), np.concatenate(needs)
+
+
+def _no_ends() -> TurnEnds:
+    empty = np.zeros(0)
+    return TurnEnds(empty, empty, empty, empty, empty, empty)
+
+
+def machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon | MultiPolygon:
+    """Erode the field by half the vehicle's width: where the path may run (R1).
+
+    For a convex field the mitred erosion is exact; round joins (the default) are the exact
+    erosion of any field, with arcs round its inner corners.
+
+    Raises
+    ------
+    InvalidParameterError
+        If nothing is left: the vehicle is wider than the field.
+    """
+    half = vehicle.width_m / 2.0
+    join: Literal["mitre", "round"] = "mitre" if _convex(field_local) else "round"
+    eroded = field_local.buffer(-half, join_style=join)
+    parts = [p for p in shapely.get_parts(eroded) if isinstance(p, Polygon) and p.area > 1e-9]
+    if parts:
+        # Slivers cut off where the bund bends sharply hold no line worth a trip.
+        largest = max(p.area for p in parts)
+        parts = [p for p in parts if p.area >= MIN_PART_SHARE * largest]
+    if not parts:
+        raise InvalidParameterError(
+            "vehicle", f"a {vehicle.width_m:g} m-wide vehicle does not fit in this field"
+        )
+    if len(parts) == 1:
+        return shapely.orient_polygons(parts[0])
+    multi: MultiPolygon = shapely.orient_polygons(MultiPolygon(parts))
+    return multi
+
+
+def snake_skip(vehicle: Vehicle, interval_m: float) -> int:
+    """Lines to skip from one driven line to the next so that turns need no loop.
+
+    A U-turn of two arcs needs the lines two turning radii apart.
+
+    Examples
+    --------
+    >>> from planner.vehicles import resolve_vehicle
+    >>> snake_skip(resolve_vehicle("small_tractor"), 4.0), snake_skip(
+    ...     resolve_vehicle("hand_tractor"), 4.0)
+    (2, 1)
+    """
+    return max(1, math.ceil(2.0 * turning_radius_m(vehicle) / interval_m - 1e-9))
+
+
+@functools.lru_cache(maxsize=256)
+def side_reach_m(vehicle: Vehicle, spacings_m: tuple[float, ...]) -> float:
+    """How far the vehicle's turns swing out sideways beyond the two lines they join [m].
+
+    Two arcs and a straight stay between the lines; an Ω bulges out by ``radius - spacing/2``
+    on each side. Measured on the turns themselves, for every spacing given (cached: the
+    same vehicle and interval come back request after request).
+    """
+    s = np.asarray(spacings_m, dtype=float)
+    zero = np.zeros(len(s))
+    ends = TurnEnds(zero, zero, zero + math.pi / 2.0, s, zero, zero - math.pi / 2.0)
+    curves = vehicle_turns(ends, vehicle)
+    owner = np.repeat(np.arange(len(s)), np.diff(curves.offsets))
+    beyond = np.maximum(-curves.xy[:, 0], curves.xy[:, 0] - s[owner])
+    return float(max(beyond.max(initial=0.0), 0.0))
+
+
+@functools.lru_cache(maxsize=256)
+def end_reach_m(vehicle: Vehicle, spacing_m: float) -> float:
+    """How far the vehicle's U-turn between lines ``spacing_m`` apart runs past their ends [m].
+
+    Each line end is pulled back by about this much (:func:`fit_lines`).
+
+    Examples
+    --------
+    >>> from planner.vehicles import resolve_vehicle
+    >>> round(end_reach_m(resolve_vehicle("hand_tractor"), 4.0), 3)   # the pivot: half the track
+    0.35
+    """
+    zero = np.zeros(1)
+    ends = TurnEnds(zero, zero, zero + math.pi / 2.0, zero + spacing_m, zero, zero - math.pi / 2.0)
+    curves = vehicle_turns(ends, vehicle)
+    return float(max(curves.xy[:, 1].max(initial=0.0), 0.0))
+
+
+def fitting_loss_m2(vehicle: Vehicle, interval_m: float, line_counts: IntArray) -> FloatArray:
+    """Estimate the area the fitting takes from straight lines that end on the boundary [m²].
+
+    Every line loses half the vehicle's width at both ends (it ends on the machine area), and
+    every end at a turn the turn's reach past it (:func:`end_reach_m`), each over one interval
+    of width. The heading search subtracts this from its closed-form coverage, so that a
+    heading with more, shorter lines is not preferred for a coverage it will not have.
+    """
+    n = np.asarray(line_counts, dtype=float)
+    turn_ends = 2.0 * np.maximum(n - 1.0, 0.0)
+    per_m = n * vehicle.width_m + turn_ends * end_reach_m(vehicle, float(interval_m))
+    return np.asarray(per_m * float(interval_m))
+
+
+def convex_lines(
+    field_local: Polygon,
+    heading_deg: float,
+    *,
+    interval_m: float,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    variant: int,
+) -> FittedLines:
+    """Place, order and fit the lines of a convex field for ``vehicle`` (sweep frame).
+
+    The outermost lines lie ``interval / 2`` inside the boundary (R3) unless the body or its
+    turns need more room: then half the vehicle's width plus the turns' sideways reach. The
+    lines end on the machine area and are pulled back until the turns fit (:func:`fit_lines`).
+
+    Raises
+    ------
+    InvalidParameterError
+        If the vehicle does not fit the field.
+    """
+    d = float(interval_m)
+    area = machine_area(field_local, vehicle)
+    if isinstance(area, MultiPolygon):  # only a non-convex field erodes into pieces
+        area = max(area.geoms, key=lambda p: p.area)
+    ring = np.asarray(area.exterior.coords)[:-1]
+    mu, mv = to_sweep(ring[:, 0], ring[:, 1], heading_deg)
+    machine = convex_chains(mu, mv)
+    outer = np.asarray(field_local.exterior.coords)[:-1]
+    fu, _ = to_sweep(outer[:, 0], outer[:, 1], heading_deg)
+    u_min, u_max = float(fu.min()), float(fu.max())
+    skip = snake_skip(vehicle, d) if pattern == "snake" else 1
+    spacings = tuple(d * k for k in range(1, skip + 1))
+    margin = max(d / 2.0, vehicle.width_m / 2.0 + side_reach_m(vehicle, spacings))
+    if u_max - u_min >= 2.0 * margin:
+        u = line_positions(u_min + margin - d / 2.0, u_max - margin + d / 2.0, d)
+    else:
+        u = np.array([(machine.u_min + machine.u_max) / 2.0])
+    u = np.clip(u, machine.u_min, machine.u_max)
+    v_lo = np.interp(u, machine.lo_u, machine.lo_v)
+    v_hi = np.interp(u, machine.hi_u, machine.hi_v)
+    n = len(u)
+    if pattern == "snake":
+        index, up = order_snake(n, variant, skip=skip)
+    else:
+        index, up = order_boustrophedon(n, variant)
+    lo, hi = v_lo[index], v_hi[index]
+    fit = fit_lines(
+        u[index],
+        np.where(up, lo, hi),
+        np.where(up, hi, lo),
+        index,
+        machine=machine,
+        vehicle=vehicle,
+    )
+    # Narrower than the turning circle and the body: no turn can fit, say so.
+    width = u_max - u_min
+    too_narrow = width < 2.0 * turning_radius_m(vehicle) + vehicle.width_m
+    if len(fit.u) == 1 and width > d and too_narrow:
+        raise InvalidParameterError(
+            "vehicle",
+            f"a {turning_radius_m(vehicle):g} m turning radius does not fit this "
+            f"{width:.1f} m-wide field",
+        )
+    return fit
+
+
+def _convex(polygon: Polygon) -> bool:
+    hull = polygon.convex_hull
+    return not polygon.interiors and bool(hull.area - polygon.area <= 1e-9 * max(hull.area, 1.0))
