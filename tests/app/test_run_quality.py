@@ -103,7 +103,8 @@ def _skipping_track(skip_line: int) -> tuple[list[float], list[float]]:
     """
     plan = paper_plan()
     frame = field_frame(plan.field_lonlat)
-    wps = list(plan.waypoints)
+    # Line ends only: the driven turns' points next to the skipped line would trace it.
+    wps = [w for w in plan.waypoints if w.role != "turn"]
     keep = [w for w in wps if w.line != skip_line]
     if 0 <= skip_line:
         after = [w for w in keep if w.line == skip_line + 1]
