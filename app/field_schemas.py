@@ -8,7 +8,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.models import PLAN_NAME_MAX_LENGTH
-from app.schemas import Position, StoredText
+from app.schemas import PAPER_FIELD_EXAMPLE, PAPER_START_EXAMPLE, Position, StoredText
 
 #: Longest notes of a field [characters].
 NOTES_MAX_LENGTH = 10_000
@@ -33,19 +33,8 @@ class FieldCreate(BaseModel):
             "examples": [
                 {
                     "name": "Ketewel",
-                    "boundary": {
-                        "type": "Polygon",
-                        "coordinates": [
-                            [
-                                [115.298, -8.6265],
-                                [115.29813989, -8.62649238],
-                                [115.29814712, -8.62631751],
-                                [115.29800448, -8.62632237],
-                                [115.298, -8.6265],
-                            ]
-                        ],
-                    },
-                    "start": [115.29797264, -8.62652248],
+                    "boundary": PAPER_FIELD_EXAMPLE,
+                    "start": PAPER_START_EXAMPLE,
                     "notes": "Sawah of Pak Wayan; the gate is by the irrigation inlet.",
                 }
             ]

@@ -73,6 +73,23 @@ def _no_nul(value: str) -> str:
 StoredText = Annotated[str, AfterValidator(_no_nul)]
 
 
+#: The paper's field (Ketewel, Bali) and its gates: the examples of the API's request bodies.
+PAPER_FIELD_EXAMPLE: dict[str, Any] = {
+    "type": "Polygon",
+    "coordinates": [
+        [
+            [115.298, -8.6265],
+            [115.29813989, -8.62649238],
+            [115.29814712, -8.62631751],
+            [115.29800448, -8.62632237],
+            [115.298, -8.6265],
+        ]
+    ],
+}
+PAPER_START_EXAMPLE: list[Any] = [115.29797264, -8.62652248]
+PAPER_FINISH_EXAMPLE: list[Any] = [115.29816889, -8.62652064]
+
+
 class PlanCreate(BaseModel):
     """Body of ``POST /api/plans`` and ``POST /api/plans/preview`` (product.md §3 inputs)."""
 
@@ -83,21 +100,10 @@ class PlanCreate(BaseModel):
             "examples": [
                 {
                     "name": "Ketewel",
-                    "field": {
-                        "type": "Polygon",
-                        "coordinates": [
-                            [
-                                [115.298, -8.6265],
-                                [115.29813989, -8.62649238],
-                                [115.29814712, -8.62631751],
-                                [115.29800448, -8.62632237],
-                                [115.298, -8.6265],
-                            ]
-                        ],
-                    },
+                    "field": PAPER_FIELD_EXAMPLE,
                     "interval_m": 4,
-                    "start": [115.29797264, -8.62652248],
-                    "finish": [115.29816889, -8.62652064],
+                    "start": PAPER_START_EXAMPLE,
+                    "finish": PAPER_FINISH_EXAMPLE,
                 }
             ]
         },
