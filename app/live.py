@@ -26,7 +26,7 @@ from app.capacity import HeavyWork
 from app.db import end_reads
 from app.errors import NotFoundError
 from app.models import Fix, Run
-from app.runs import MAX_TRACK_POINTS, _finite, _thin, run_view
+from app.runs import MAX_TRACK_POINTS, RunTrack, _finite, _thin, run_view
 from app.tracks import datetime_to_us, us_to_datetime
 
 #: Least time between two background recomputations of one run's metrics [s].
@@ -115,9 +115,14 @@ def remember(session: Session, run: Run, view: dict[str, Any], *, threshold_m: f
     CACHE.put(_key(session, run, threshold_m), summary)
 
 
-def full_view(session: Session, run: Run, *, threshold_m: float) -> dict[str, Any]:
-    """Answer ``GET /api/runs/{id}`` without ``since``: everything, scored now (and cached)."""
-    view = run_view(session, run, threshold_m=threshold_m)
+def full_view(
+    session: Session, run: Run, *, threshold_m: float, track: RunTrack | None = None
+) -> dict[str, Any]:
+    """Answer ``GET /api/runs/{id}`` without ``since``: everything, scored now (and cached).
+
+    ``track``: the run's fixes if the caller holds them (an upload), else they are loaded.
+    """
+    view = run_view(session, run, threshold_m=threshold_m, track=track)
     remember(session, run, view, threshold_m=threshold_m)
     view["metrics_fix_count"] = view["fix_count"]
     return view

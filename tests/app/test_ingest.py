@@ -124,8 +124,7 @@ def test_collect_sorts_keeps_the_first_of_equal_times_and_maps_none_to_nan():
             TrackFix(T0 + 2, 1.0, 2.0),
             TrackFix(T0 + 1, 3.0, 4.0, speed_mps=1.5),
             TrackFix(T0 + 2, 9, 9),
-        ],
-        batch_rows=2,
+        ]
     )
     assert columns.t.tolist() == [T0 + 1, T0 + 2]
     assert columns.lat.tolist() == [3.0, 1.0]
