@@ -175,8 +175,9 @@ def fix_columns() -> tuple[str, ...]:
 def store_fixes(session: Session, run_id: int, fixes: FixColumns, *, new_run: bool = False) -> int:
     """Insert ``fixes`` into run ``run_id`` in the session's transaction; return how many were new.
 
-    Timestamps the run already has are skipped (``ON CONFLICT (run_id, t) DO NOTHING``).
-    Not committed here: the caller's transaction decides (all or nothing).
+    Timestamps the run already has are skipped (``ON CONFLICT (run_id, t) DO NOTHING``), and
+    the run's ``fix_count`` is raised by the number stored, in the same transaction. Not
+    committed here: the caller's transaction decides (all or nothing).
 
     Parameters
     ----------
@@ -200,21 +201,31 @@ def store_fixes(session: Session, run_id: int, fixes: FixColumns, *, new_run: bo
     assert dbapi_connection is not None
     names = ", ".join(columns)
     dialect = connection.dialect.name
+    mark = "%s" if dialect == "postgresql" else "?"
     cursor: Any = dbapi_connection.cursor()  # the driver's own (executemany takes iterators)
     try:
         if dialect == "postgresql" and new_run:
             with cursor.copy(f"COPY fixes ({names}) FROM STDIN") as copy:
                 for row in fixes.rows(run_id, columns):
                     copy.write_row(row)
-            return len(fixes)
-        if dialect == "postgresql" and len(fixes) >= COPY_MIN_ROWS:
-            return _copy_postgresql(cursor, names, fixes.rows(run_id, columns))
-        marks = ", ".join(["%s" if dialect == "postgresql" else "?"] * len(columns))
-        cursor.executemany(
-            f"INSERT INTO fixes ({names}) VALUES ({marks}) ON CONFLICT (run_id, t) DO NOTHING",
-            fixes.rows(run_id, columns),
-        )
-        return int(cursor.rowcount)
+            stored = len(fixes)
+        elif dialect == "postgresql" and len(fixes) >= COPY_MIN_ROWS:
+            stored = _copy_postgresql(cursor, names, fixes.rows(run_id, columns))
+        else:
+            marks = ", ".join([mark] * len(columns))
+            cursor.executemany(
+                f"INSERT INTO fixes ({names}) VALUES ({marks}) ON CONFLICT (run_id, t) DO NOTHING",
+                fixes.rows(run_id, columns),
+            )
+            stored = int(cursor.rowcount)
+        if stored:
+            # Last in the transaction: concurrent batches of a run queue here (the row's lock)
+            # only once their fixes are in, and each adds what it stored itself.
+            cursor.execute(
+                f"UPDATE runs SET fix_count = fix_count + {mark} WHERE id = {mark}",
+                (stored, run_id),
+            )
+        return stored
     finally:
         cursor.close()
 

@@ -20,7 +20,7 @@ from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
-from sqlalchemy import func, select
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from app import ingest
@@ -28,7 +28,7 @@ from app.auth import Access, owned
 from app.db import add_row, end_reads, write
 from app.errors import ConflictError, NotFoundError
 from app.missed import missed_ground_geojson, plan_follow_up
-from app.models import Fix, Plan, Run
+from app.models import Plan, Run
 from app.receiver import receiver_report
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
 from app.services import (
@@ -255,8 +255,8 @@ def read_run(session: Session, run_id: int, access: Access) -> Run:
 
 
 def count_fixes(session: Session, run_id: int) -> int:
-    """Return how many fixes run ``run_id`` has."""
-    return session.scalar(select(func.count()).select_from(Fix).where(Fix.run_id == run_id)) or 0
+    """Return how many fixes run ``run_id`` has (its row's ``fix_count``: nothing is counted)."""
+    return session.scalar(select(Run.fix_count).where(Run.id == run_id)) or 0
 
 
 def load_track(session: Session, run_id: int) -> RunTrack:
@@ -338,11 +338,9 @@ def score_run(
 
 def list_runs(session: Session, plan_id: int, access: Access) -> RunList:
     """Return ``plan_id``'s runs, newest first, with their fix counts."""
-    counts = select(Fix.run_id, func.count().label("n")).group_by(Fix.run_id).subquery("counts")
     rows = session.execute(
         owned(Run, access)
-        .add_columns(func.coalesce(counts.c.n, 0))
-        .outerjoin(counts, counts.c.run_id == Run.id)
+        .add_columns(Run.fix_count)
         .where(Run.plan_id == plan_id)
         .order_by(Run.created_at.desc(), Run.id.desc())
     ).all()
