@@ -148,7 +148,7 @@ def collect(fixes: Iterable[TrackFix]) -> FixColumns:
     ]
     del quality
     if len(columns[0]) < 2 or (np.diff(columns[0]) > 0).all():  # in time order: nothing to do
-        return FixColumns(*columns)
+        return _fix_columns(columns, duplicates=0)
     order = np.argsort(columns[0], kind="stable")  # stable: the first of equal times stays first
     ordered = columns[0][order]
     keep = np.ones(len(ordered), dtype=bool)
@@ -158,7 +158,12 @@ def collect(fixes: Iterable[TrackFix]) -> FixColumns:
     del order, ordered, keep
     for i in range(len(columns)):  # one column at a time: one extra copy at most
         columns[i] = columns[i][picked]
-    return FixColumns(*columns, duplicates=duplicates)
+    return _fix_columns(columns, duplicates=duplicates)
+
+
+def _fix_columns(columns: list[npt.NDArray[Any]], *, duplicates: int) -> FixColumns:
+    t, lat, lon, heading, speed, hdop, satellites, quality = columns
+    return FixColumns(t, lat, lon, heading, speed, hdop, satellites, quality, duplicates)
 
 
 def columns_from_fixes(fixes: Iterable[TrackFix]) -> FixColumns:

@@ -16,7 +16,7 @@ import math
 from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any, Final, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -378,7 +378,7 @@ def track_from_columns(columns: ingest.FixColumns) -> RunTrack:
         lat=columns.lat,
         heading_deg=columns.heading_deg,
         speed_mps=columns.speed_mps,
-        quality=columns.quality,
+        quality=cast("Sequence[str | None]", columns.quality),  # an object array of them
         hdop=columns.hdop,
         satellites=columns.satellites,
     )
