@@ -155,3 +155,21 @@ def test_a_uvicorn_whose_protocol_methods_changed_is_refused(monkeypatch: pytest
     monkeypatch.setattr(H11Protocol, "data_received", data_received)
     with pytest.raises(serving.UvicornChangedError, match="H11Protocol.data_received takes"):
         serving.check_uvicorn()
+
+
+def test_tillpath_serve_refuses_to_start_on_a_uvicorn_it_no_longer_fits(
+    monkeypatch: pytest.MonkeyPatch,
+):
+    from typer.testing import CliRunner
+
+    from app.cli import cli
+
+    def changed() -> None:
+        raise serving.UvicornChangedError("uvicorn 9.9 (app.serving was written for 0.54.0): x")
+
+    monkeypatch.setattr(serving, "check_uvicorn", changed)
+    result = CliRunner().invoke(cli, ["serve", "--port", "9"])
+    assert result.exit_code == 2
+    assert "error: uvicorn 9.9 (app.serving was written for 0.54.0): x; install the locked" in (
+        result.output
+    )
