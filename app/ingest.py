@@ -1,9 +1,9 @@
 """Bulk ingestion of a run's fixes: parsed fixes to compact columns, columns to the database.
 
 An upload is parsed as a stream (:func:`app.tracks.read_track`) into :class:`FixColumns`
-(about 60 bytes a fix: numpy arrays, never one Python object per fix), sorted by time with one
-fix per timestamp, before any write. Then the columns are stored in one short transaction
-through the database's bulk path:
+(about 60 bytes a fix: numpy arrays, never one Python object per fix, see :func:`collect`),
+sorted by time with one fix per timestamp, before any write. Then the columns are stored in
+one short transaction through the database's bulk path:
 
 - **PostgreSQL**: ``COPY`` (psycopg's ``Cursor.copy``) straight into ``fixes`` for a run made
   in the same transaction (it has no fix yet, and the columns hold one fix per timestamp), else
@@ -19,6 +19,8 @@ stores all of its fixes or none. Columns the ``fixes`` table has beyond the five
 
 from __future__ import annotations
 
+import math
+from array import array
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any, Final
@@ -30,7 +32,7 @@ from sqlalchemy.orm import Session
 from app.models import Fix
 from app.tracks import TrackFix
 
-#: Fixes converted to arrays at a time while parsing.
+#: Rows made into Python tuples at a time when the columns are written.
 BATCH_ROWS: Final = 10_000
 #: Smallest batch sent through ``COPY`` on PostgreSQL (smaller ones: one ``executemany``).
 COPY_MIN_ROWS: Final = 500
@@ -95,15 +97,16 @@ class FixColumns:
             yield from zip(*lists, strict=True)
 
 
-def _nan(value: float | None) -> float:
-    return np.nan if value is None else value
-
-
-def collect(fixes: Iterable[TrackFix], *, batch_rows: int = BATCH_ROWS) -> FixColumns:
+def collect(fixes: Iterable[TrackFix]) -> FixColumns:
     """Consume ``fixes`` into :class:`FixColumns`, sorted by time, first of each time kept.
 
-    Memory is the columns (about 60 bytes a fix) plus one batch of ``batch_rows`` fix objects;
-    a :class:`~app.tracks.TrackFormatError` raised while reading propagates unchanged.
+    Each value is appended to a growing :class:`array.array` per column, which the columns then
+    share (no copy): memory is the columns (about 60 bytes a fix, plus up to an eighth while
+    they grow), never one Python object per fix nor the columns twice. (Arrays that grow by
+    ``realloc`` move their pages instead of copying them; batches joined at the end would leave
+    the freed batches in the process's resident memory.) Out of order, the columns are sorted
+    one at a time. A :class:`~app.tracks.TrackFormatError` raised while reading propagates
+    unchanged.
 
     Examples
     --------
@@ -111,55 +114,56 @@ def collect(fixes: Iterable[TrackFix], *, batch_rows: int = BATCH_ROWS) -> FixCo
     >>> cols.t.tolist(), cols.lat.tolist(), cols.duplicates
     ([1, 2], [0.0, 1.0], 1)
     """
-    chunks: list[tuple[npt.NDArray[Any], ...]] = []
-    batch: list[TrackFix] = []
-
-    def flush() -> None:
-        chunks.append(
-            (
-                np.fromiter((f.t for f in batch), dtype=np.int64, count=len(batch)),
-                np.fromiter((f.lat for f in batch), dtype=np.float64, count=len(batch)),
-                np.fromiter((f.lon for f in batch), dtype=np.float64, count=len(batch)),
-                np.fromiter((_nan(f.heading_deg) for f in batch), np.float64, len(batch)),
-                np.fromiter((_nan(f.speed_mps) for f in batch), np.float64, len(batch)),
-                np.fromiter((_nan(f.hdop) for f in batch), np.float64, len(batch)),
-                np.fromiter(
-                    (_nan(None if f.satellites is None else float(f.satellites)) for f in batch),
-                    np.float64,
-                    len(batch),
-                ),
-                np.array([f.quality for f in batch], dtype=object),
-            )
-        )
-        batch.clear()
-
+    nan = math.nan
+    t, lat, lon = array("q"), array("d"), array("d")
+    heading, speed, hdop, satellites = array("d"), array("d"), array("d"), array("d")
+    quality = array("B")  # index into ``names`` (None and the few FIX_QUALITIES)
+    names: list[str | None] = [None]
+    codes: dict[str | None, int] = {None: 0}
+    add_t, add_lat, add_lon = t.append, lat.append, lon.append
+    add_heading, add_speed, add_hdop = heading.append, speed.append, hdop.append
+    add_satellites, add_quality = satellites.append, quality.append
     for fix in fixes:
-        batch.append(fix)
-        if len(batch) >= batch_rows:
-            flush()
-    if batch:
-        flush()
-    if not chunks:
-        empty = np.array([], dtype=np.float64)
-        return FixColumns(
-            np.array([], dtype=np.int64), empty, empty, empty, empty, empty, empty,
-            np.array([], dtype=object),
-        )  # fmt: skip
-    columns = [np.concatenate(parts) for parts in zip(*chunks, strict=True)]
-    chunks.clear()
-    if (np.diff(columns[0]) > 0).all():  # a log in time order: nothing to sort or drop
-        lat, lon, heading, speed, hdop, satellites, quality = columns[1:]
-        return FixColumns(columns[0], lat, lon, heading, speed, hdop, satellites, quality)
+        add_t(fix.t)
+        add_lat(fix.lat)
+        add_lon(fix.lon)
+        add_heading(nan if fix.heading_deg is None else fix.heading_deg)
+        add_speed(nan if fix.speed_mps is None else fix.speed_mps)
+        add_hdop(nan if fix.hdop is None else fix.hdop)
+        add_satellites(nan if fix.satellites is None else fix.satellites)
+        code = codes.get(fix.quality)
+        if code is None:  # a quality not seen yet in this file
+            code = codes[fix.quality] = len(names)
+            names.append(fix.quality)
+        add_quality(code)
+    columns: list[npt.NDArray[Any]] = [
+        np.frombuffer(t, dtype=np.int64) if len(t) else np.array([], dtype=np.int64),
+        *(
+            np.frombuffer(c, dtype=np.float64) if len(c) else np.array([], dtype=np.float64)
+            for c in (lat, lon, heading, speed, hdop, satellites)
+        ),
+        np.array(names, dtype=object)[np.frombuffer(quality, dtype=np.uint8)]
+        if len(quality)
+        else np.array([], dtype=object),
+    ]
+    del quality
+    if len(columns[0]) < 2 or (np.diff(columns[0]) > 0).all():  # in time order: nothing to do
+        return _fix_columns(columns, duplicates=0)
     order = np.argsort(columns[0], kind="stable")  # stable: the first of equal times stays first
-    t = columns[0][order]
-    keep = np.ones(len(t), dtype=bool)
-    keep[1:] = t[1:] != t[:-1]
+    ordered = columns[0][order]
+    keep = np.ones(len(ordered), dtype=bool)
+    keep[1:] = ordered[1:] != ordered[:-1]
     picked = order[keep]
-    lat, lon, heading, speed, hdop, satellites, quality = (c[picked] for c in columns[1:])
-    return FixColumns(
-        t[keep], lat, lon, heading, speed, hdop, satellites, quality,
-        duplicates=int(len(t) - keep.sum()),
-    )  # fmt: skip
+    duplicates = int(len(ordered) - keep.sum())
+    del order, ordered, keep
+    for i in range(len(columns)):  # one column at a time: one extra copy at most
+        columns[i] = columns[i][picked]
+    return _fix_columns(columns, duplicates=duplicates)
+
+
+def _fix_columns(columns: list[npt.NDArray[Any]], *, duplicates: int) -> FixColumns:
+    t, lat, lon, heading, speed, hdop, satellites, quality = columns
+    return FixColumns(t, lat, lon, heading, speed, hdop, satellites, quality, duplicates)
 
 
 def columns_from_fixes(fixes: Iterable[TrackFix]) -> FixColumns:
@@ -176,8 +180,9 @@ def fix_columns() -> tuple[str, ...]:
 def store_fixes(session: Session, run_id: int, fixes: FixColumns, *, new_run: bool = False) -> int:
     """Insert ``fixes`` into run ``run_id`` in the session's transaction; return how many were new.
 
-    Timestamps the run already has are skipped (``ON CONFLICT (run_id, t) DO NOTHING``).
-    Not committed here: the caller's transaction decides (all or nothing).
+    Timestamps the run already has are skipped (``ON CONFLICT (run_id, t) DO NOTHING``), and
+    the run's ``fix_count`` is raised by the number stored, in the same transaction. Not
+    committed here: the caller's transaction decides (all or nothing).
 
     Parameters
     ----------
@@ -201,21 +206,31 @@ def store_fixes(session: Session, run_id: int, fixes: FixColumns, *, new_run: bo
     assert dbapi_connection is not None
     names = ", ".join(columns)
     dialect = connection.dialect.name
+    mark = "%s" if dialect == "postgresql" else "?"
     cursor: Any = dbapi_connection.cursor()  # the driver's own (executemany takes iterators)
     try:
         if dialect == "postgresql" and new_run:
             with cursor.copy(f"COPY fixes ({names}) FROM STDIN") as copy:
                 for row in fixes.rows(run_id, columns):
                     copy.write_row(row)
-            return len(fixes)
-        if dialect == "postgresql" and len(fixes) >= COPY_MIN_ROWS:
-            return _copy_postgresql(cursor, names, fixes.rows(run_id, columns))
-        marks = ", ".join(["%s" if dialect == "postgresql" else "?"] * len(columns))
-        cursor.executemany(
-            f"INSERT INTO fixes ({names}) VALUES ({marks}) ON CONFLICT (run_id, t) DO NOTHING",
-            fixes.rows(run_id, columns),
-        )
-        return int(cursor.rowcount)
+            stored = len(fixes)
+        elif dialect == "postgresql" and len(fixes) >= COPY_MIN_ROWS:
+            stored = _copy_postgresql(cursor, names, fixes.rows(run_id, columns))
+        else:
+            marks = ", ".join([mark] * len(columns))
+            cursor.executemany(
+                f"INSERT INTO fixes ({names}) VALUES ({marks}) ON CONFLICT (run_id, t) DO NOTHING",
+                fixes.rows(run_id, columns),
+            )
+            stored = int(cursor.rowcount)
+        if stored:
+            # Last in the transaction: concurrent batches of a run queue here (the row's lock)
+            # only once their fixes are in, and each adds what it stored itself.
+            cursor.execute(
+                f"UPDATE runs SET fix_count = fix_count + {mark} WHERE id = {mark}",
+                (stored, run_id),
+            )
+        return stored
     finally:
         cursor.close()
 

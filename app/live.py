@@ -1,8 +1,9 @@
 """Live reads of a run that stay fast as it grows: new fixes since the last poll, cached figures.
 
 ``GET /api/runs/{id}?since=T`` answers with the fixes after time ``T`` only (one range query
-on the ``(run_id, t)`` key), the fix count, the first and the last fix, and the run's metrics,
-missed ground and receiver note from a per-process cache. The metrics and the missed ground
+on the ``(run_id, t)`` key), the fix count (kept on the run's row, never counted), the first
+and the last fix, and the run's metrics, missed ground and receiver note from a per-process
+cache. The metrics and the missed ground
 take about 1 s for a 6-hour, 216,000-fix run, so they are never computed in a poll: a poll
 that finds them older than the fixes starts one recomputation in the background (one per run
 at a time, only when a heavy-work slot is free, at most every :data:`REFRESH_INTERVAL_S`), and
@@ -19,14 +20,14 @@ from dataclasses import dataclass
 from typing import Any, Final
 
 import numpy as np
-from sqlalchemy import Engine, func, select
+from sqlalchemy import Engine, select
 from sqlalchemy.orm import Session
 
 from app.capacity import HeavyWork
 from app.db import end_reads
 from app.errors import NotFoundError
 from app.models import Fix, Run
-from app.runs import MAX_TRACK_POINTS, _finite, _thin, run_view
+from app.runs import MAX_TRACK_POINTS, RunTrack, _finite, _thin, run_view
 from app.tracks import datetime_to_us, us_to_datetime
 
 #: Least time between two background recomputations of one run's metrics [s].
@@ -115,9 +116,14 @@ def remember(session: Session, run: Run, view: dict[str, Any], *, threshold_m: f
     CACHE.put(_key(session, run, threshold_m), summary)
 
 
-def full_view(session: Session, run: Run, *, threshold_m: float) -> dict[str, Any]:
-    """Answer ``GET /api/runs/{id}`` without ``since``: everything, scored now (and cached)."""
-    view = run_view(session, run, threshold_m=threshold_m)
+def full_view(
+    session: Session, run: Run, *, threshold_m: float, track: RunTrack | None = None
+) -> dict[str, Any]:
+    """Answer ``GET /api/runs/{id}`` without ``since``: everything, scored now (and cached).
+
+    ``track``: the run's fixes if the caller holds them (an upload), else they are loaded.
+    """
+    view = run_view(session, run, threshold_m=threshold_m, track=track)
     remember(session, run, view, threshold_m=threshold_m)
     view["metrics_fix_count"] = view["fix_count"]
     return view
@@ -173,8 +179,10 @@ def live_view(
     ``time_s`` counted from the run's first fix as in a full read; ``metrics`` and
     ``stretches`` are the cached figures, covering ``metrics_fix_count`` fixes.
     """
-    count = session.scalar(select(func.count()).select_from(Fix).where(Fix.run_id == run.id)) or 0
-    first = session.scalar(select(func.min(Fix.t)).where(Fix.run_id == run.id))
+    # The run's row keeps its count (app.ingest.store_fixes): nothing is counted here, and
+    # every other read is a look-up on the (run_id, t) key.
+    count = session.scalar(select(Run.fix_count).where(Run.id == run.id)) or 0
+    first = session.scalar(select(Fix.t).where(Fix.run_id == run.id).order_by(Fix.t).limit(1))
     last = session.execute(
         select(Fix.t, Fix.lat, Fix.lon, Fix.heading_deg, Fix.speed_mps)
         .where(Fix.run_id == run.id)

@@ -25,6 +25,7 @@ from app.errors import ConflictError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan
 from app.services import _waypoint_dict, coverage_plan_from_row, polygon_to_geojson
 from navigation.coverage import implement_width_m, missed_ground
+from navigation.metrics import to_local_xy
 from planner.export import plan_to_geojson
 from planner.projection import LocalFrame, field_frame
 from planner.types import CoveragePlan, PathSegment, PlanStats, Waypoint
@@ -33,8 +34,8 @@ from planner.types import CoveragePlan, PathSegment, PlanStats, Waypoint
 def _gaps(plan: Plan, lon: Any, lat: Any) -> tuple[CoveragePlan, LocalFrame, list[Polygon]]:
     coverage = coverage_plan_from_row(plan)
     frame = field_frame(coverage.field_lonlat)
-    x, y = frame.to_local_xy(np.asarray(lon, dtype=float), np.asarray(lat, dtype=float))
-    gaps = missed_ground(frame, coverage, np.asarray(x), np.asarray(y))
+    x, y = to_local_xy(frame, np.asarray(lon, dtype=float), np.asarray(lat, dtype=float))
+    gaps = missed_ground(frame, coverage, x, y)
     return coverage, frame, gaps
 
 

@@ -24,6 +24,7 @@ from sqlalchemy import (
     SmallInteger,
     String,
     Text,
+    text,
 )
 from sqlalchemy.orm import Mapped, mapped_column
 from sqlalchemy.types import TypeDecorator
@@ -169,6 +170,9 @@ class Run(Base):
     import_report : dict
         What the parser kept and dropped (``{"format", "fixes", "skipped_lines", …}``); empty
         for a live run.
+    fix_count : int
+        The run's fixes, kept up to date by the transaction that stores each batch
+        (:func:`app.ingest.store_fixes`), so that reading it counts nothing.
     """
 
     __tablename__ = "runs"
@@ -182,6 +186,7 @@ class Run(Base):
     source: Mapped[str] = mapped_column(String(8))
     created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utc_now)
     import_report: Mapped[dict[str, Any]] = mapped_column(JSON)
+    fix_count: Mapped[int] = mapped_column(Integer, default=0, server_default=text("0"))
 
 
 class Fix(Base):

@@ -13,13 +13,14 @@ after the parsing and before the scoring.
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any, Final, cast
 
 import numpy as np
 import numpy.typing as npt
-from sqlalchemy import func, select
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from app import ingest
@@ -27,7 +28,7 @@ from app.auth import Access, owned
 from app.db import add_row, end_reads, write
 from app.errors import ConflictError, NotFoundError
 from app.missed import missed_ground_geojson, plan_follow_up
-from app.models import Fix, Plan, Run
+from app.models import Plan, Run
 from app.receiver import receiver_report
 from app.schemas import MAX_FIXES_PER_BATCH, FixIn, RunList, RunSummary
 from app.services import (
@@ -75,7 +76,7 @@ class RunTrack:
         WGS84 [deg].
     heading_deg, speed_mps : float arrays
         NaN where unknown.
-    quality : list of (str or None)
+    quality : sequence of (str or None)
         Fix quality per fix (:data:`app.tracks.FIX_QUALITIES`), None where unknown.
     hdop, satellites : float arrays
         NaN where unknown.
@@ -86,7 +87,7 @@ class RunTrack:
     lat: FloatArray
     heading_deg: FloatArray
     speed_mps: FloatArray
-    quality: list[str | None] = field(default_factory=list)
+    quality: Sequence[str | None] = field(default_factory=list)
     hdop: FloatArray = field(default_factory=lambda: np.array([], dtype=float))
     satellites: FloatArray = field(default_factory=lambda: np.array([], dtype=float))
 
@@ -254,8 +255,8 @@ def read_run(session: Session, run_id: int, access: Access) -> Run:
 
 
 def count_fixes(session: Session, run_id: int) -> int:
-    """Return how many fixes run ``run_id`` has."""
-    return session.scalar(select(func.count()).select_from(Fix).where(Fix.run_id == run_id)) or 0
+    """Return how many fixes run ``run_id`` has (its row's ``fix_count``: nothing is counted)."""
+    return session.scalar(select(Run.fix_count).where(Run.id == run_id)) or 0
 
 
 def load_track(session: Session, run_id: int) -> RunTrack:
@@ -283,27 +284,35 @@ def load_track(session: Session, run_id: int) -> RunTrack:
             f"WHERE run_id = {int(run_id)} ORDER BY t"
         )
         # In blocks: the driver's row tuples of a whole day's log would take ~250 bytes a fix.
-        blocks = []
+        # Each block's columns are appended to growing arrays (moved, not copied, as they
+        # grow), so the columns are never held twice.
+        t = array("q")
+        floats = [array("d") for _ in range(6)]  # lon, lat, heading, speed, hdop, satellites
         quality: list[str | None] = []
         while rows := cursor.fetchmany(_LOAD_BLOCK_ROWS):
-            blocks.append(np.array([row[:7] for row in rows], dtype=np.float64))  # None -> nan
+            block = np.array([row[:7] for row in rows], dtype=np.float64)  # None -> nan
+            t.frombytes(block[:, 0].astype(np.int64).tobytes())
+            for i, column in enumerate(floats, start=1):
+                column.frombytes(np.ascontiguousarray(block[:, i]).tobytes())
             quality.extend(row[7] for row in rows)
+            del block, rows
     finally:
         cursor.close()
-    if not blocks:
+    if not t:
         empty = np.array([], dtype=float)
         return RunTrack(np.array([], dtype=np.int64), empty, empty, empty, empty)
-    table = blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
-    del blocks
+    lon, lat, heading, speed, hdop, satellites = (
+        np.frombuffer(c, dtype=np.float64) for c in floats
+    )
     return RunTrack(
-        t=table[:, 0].astype(np.int64),
-        lon=table[:, 1],
-        lat=table[:, 2],
-        heading_deg=table[:, 3],
-        speed_mps=table[:, 4],
+        t=np.frombuffer(t, dtype=np.int64),
+        lon=lon,
+        lat=lat,
+        heading_deg=heading,
+        speed_mps=speed,
         quality=quality,
-        hdop=table[:, 5],
-        satellites=table[:, 6],
+        hdop=hdop,
+        satellites=satellites,
     )
 
 
@@ -329,11 +338,9 @@ def score_run(
 
 def list_runs(session: Session, plan_id: int, access: Access) -> RunList:
     """Return ``plan_id``'s runs, newest first, with their fix counts."""
-    counts = select(Fix.run_id, func.count().label("n")).group_by(Fix.run_id).subquery("counts")
     rows = session.execute(
         owned(Run, access)
-        .add_columns(func.coalesce(counts.c.n, 0))
-        .outerjoin(counts, counts.c.run_id == Run.id)
+        .add_columns(Run.fix_count)
         .where(Run.plan_id == plan_id)
         .order_by(Run.created_at.desc(), Run.id.desc())
     ).all()
@@ -351,21 +358,56 @@ def list_runs(session: Session, plan_id: int, access: Access) -> RunList:
     return RunList(items=items, total=len(items))
 
 
+def _stride(n: int, limit: int) -> int:
+    """Every how many fixes one is drawn, so that a track of ``n`` draws about ``limit``."""
+    return max(1, math.ceil(n / limit))
+
+
 def _thin(n: int, limit: int) -> npt.NDArray[np.int64]:
     if n <= limit:
         return np.arange(n)
-    keep = np.arange(0, n, math.ceil(n / limit))
+    keep = np.arange(0, n, _stride(n, limit))
     return keep if keep[-1] == n - 1 else np.append(keep, n - 1)
 
 
+def track_from_columns(columns: ingest.FixColumns) -> RunTrack:
+    """Return an upload's parsed columns as a :class:`RunTrack` (the same arrays, no copy)."""
+    return RunTrack(
+        t=columns.t,
+        lon=columns.lon,
+        lat=columns.lat,
+        heading_deg=columns.heading_deg,
+        speed_mps=columns.speed_mps,
+        quality=cast("Sequence[str | None]", columns.quality),  # an object array of them
+        hdop=columns.hdop,
+        satellites=columns.satellites,
+    )
+
+
 def run_view(
-    session: Session, run: Run, *, threshold_m: float = DEFAULT_THRESHOLD_M
+    session: Session,
+    run: Run,
+    *,
+    threshold_m: float = DEFAULT_THRESHOLD_M,
+    track: RunTrack | None = None,
 ) -> dict[str, Any]:
-    """Everything ``GET /api/runs/{id}`` answers: the run, its metrics, track and stretches."""
+    """Everything ``GET /api/runs/{id}`` answers: the run, its metrics, track and stretches.
+
+    Parameters
+    ----------
+    session : Session
+    run : Run
+    threshold_m : float
+        Cross-track error above which a stretch is reported [m].
+    track : RunTrack or None
+        The run's fixes when the caller holds them already (an upload just stored: exactly
+        what the database has), else they are loaded.
+    """
     plan = session.get(Plan, run.plan_id)
     if plan is None:  # deleted meanwhile: the run went with it
         raise NotFoundError("run", run.id)
-    track = load_track(session, run.id)
+    if track is None:
+        track = load_track(session, run.id)
     end_reads(session)  # no connection held while scoring
     metrics = score_run(plan, track, threshold_m=threshold_m, live=run.source == "live")
     n = len(track.t)
@@ -410,10 +452,15 @@ def run_view(
         "geometry": {"type": "LineString", "coordinates": coords},
     }
     features = []
+    stride = _stride(n, MAX_TRACK_POINTS)
     for stretch in metrics.stretches if metrics else ():
         lo = int(np.searchsorted(time_s, stretch.start_s, side="left"))
         hi = int(np.searchsorted(time_s, stretch.end_s, side="right"))
-        part = np.column_stack([track.lon[lo:hi], track.lat[lo:hi]]).round(8).tolist()
+        # Drawn as finely as the track: every ``stride``-th fix, and the stretch's last.
+        pick = np.arange(lo, hi, stride)
+        if len(pick) and pick[-1] != hi - 1:
+            pick = np.append(pick, hi - 1)
+        part = np.column_stack([track.lon[pick], track.lat[pick]]).round(8).tolist()
         if len(part) == 1:
             part.append(part[0])
         features.append(

@@ -4,8 +4,9 @@
   polls, uploads, simulations, deletes racing reads) from ``THREADS`` threads for ``LOAD_S``
   seconds against ``tillpath serve`` with one and two workers, on a SQLite file and on
   PostgreSQL: requests, answers ≥ 500, p50/p99 latency, and every acknowledged write read back.
-- **Upload memory**: a 60 MiB CSV log (about 1.3 million fixes) uploaded to a one-worker server
-  on SQLite; the server's peak resident memory (``VmHWM``) above its idle size (``VmRSS``).
+- **Upload memory**: a 60 MiB CSV log (about 1.3 million fixes) and a 60 MiB GPX track uploaded
+  to a one-worker server on SQLite; the server's peak resident memory (``VmHWM``) above its
+  idle size (``VmRSS``).
 - **Live reads**: a live run fed 216,000 fixes (6 h at 10 Hz) in batches of 10,000; then the
   page's poll, ``GET /api/runs/{id}?since=<last fix>``, median of ``POLLS``; and one full read.
 - **Upload of a 6-hour log**: the same 216,000 fixes as a CSV file, end to end over HTTP (read
@@ -17,6 +18,7 @@ PostgreSQL runs on a database made for the benchmark on the server named by
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import os
 import statistics
@@ -26,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx2
+from sqlalchemy import create_engine, text
 
 from app.testing import ServerProcess, scratch_pg_database
 from app.testing_load import mixed_load, verify
@@ -79,6 +82,33 @@ def _csv_file(path: Path, *, rows: int | None = None, mib: float | None = None) 
     return written
 
 
+def _gpx_file(path: Path, *, mib: float) -> int:
+    """Write a 10 Hz GPX 1.1 track of ``mib`` MiB (the CSV log's fixes); return the count."""
+    start = dt.datetime.fromtimestamp(T0_S, tz=dt.UTC)
+    written = 0
+    with path.open("w") as out:
+        out.write(
+            '<?xml version="1.0" encoding="UTF-8"?>\n<gpx version="1.1" creator="bench" '
+            'xmlns="http://www.topografix.com/GPX/1/1"><trk><name>bench</name><trkseg>\n'
+        )
+        while out.tell() < mib * 2**20:
+            i = written
+            when = (start + dt.timedelta(milliseconds=100 * i)).isoformat(timespec="milliseconds")
+            out.write(
+                f'<trkpt lat="{-8.62645 + (i % 1000) * 2e-8:.8f}" '
+                f'lon="{115.29805 + (i % 777) * 2e-8:.8f}"><time>{when[:-6]}Z</time>'
+                f"<course>{i % 360}.0</course><speed>0.5</speed></trkpt>\n"
+            )
+            written += 1
+        out.write("</trkseg></trk></gpx>\n")
+    return written
+
+
+def _load_average() -> float:
+    """The machine's 1-minute load average (``uptime``)."""
+    return os.getloadavg()[0]
+
+
 def _load_row(label: str, url: str, workers: int, log: Path) -> str:
     server = ServerProcess(url, log=log, serve_args=("--workers", str(workers), "--no-access-log"))
     base = server.start()
@@ -96,9 +126,9 @@ def _load_row(label: str, url: str, workers: int, log: Path) -> str:
     )
 
 
-def _upload_memory(tmp: Path) -> str:
-    big = tmp / "big.csv"
-    fixes = _csv_file(big, mib=UPLOAD_MIB)
+def _upload_memory(tmp: Path, fmt: str = "csv") -> str:
+    big = tmp / f"big.{fmt}"
+    fixes = (_gpx_file if fmt == "gpx" else _csv_file)(big, mib=UPLOAD_MIB)
     server = ServerProcess(
         f"sqlite:///{tmp / 'memory.db'}",
         log=tmp / "memory.log",
@@ -113,7 +143,7 @@ def _upload_memory(tmp: Path) -> str:
             started = time.perf_counter()
             with big.open("rb") as body:
                 response = client.post(
-                    f"/api/plans/{plan['id']}/runs", files={"file": ("big.csv", body)}
+                    f"/api/plans/{plan['id']}/runs", files={"file": (big.name, body)}
                 )
             elapsed = time.perf_counter() - started
             peak = _memory_mib(server.pid, "VmHWM")
@@ -122,7 +152,7 @@ def _upload_memory(tmp: Path) -> str:
     finally:
         server.stop()
     return (
-        f"| {big.stat().st_size / 2**20:.0f} MiB CSV, {fixes:,} fixes | {idle:.0f} MiB | "
+        f"| {big.stat().st_size / 2**20:.0f} MiB {fmt.upper()}, {fixes:,} fixes | {idle:.0f} MiB | "
         f"{peak:.0f} MiB | **{peak - idle:.0f} MiB** | {elapsed:.1f} s |"
     )
 
@@ -152,6 +182,7 @@ def _live_rows(label: str, url: str, tmp: Path) -> str:
                 poll = client.get(url_run, params={"since": since})
                 polls.append(time.perf_counter() - started)
                 assert poll.status_code == 200 and poll.json()["fix_count"] == LIVE_FIXES
+            count_s = _count_seconds(url, run["id"])
 
             csv = tmp / "six_hours.csv"
             _csv_file(csv, rows=LIVE_FIXES)
@@ -166,14 +197,33 @@ def _live_rows(label: str, url: str, tmp: Path) -> str:
         server.stop()
     return (
         f"| {label} | **{statistics.median(polls) * 1000:.0f} ms** (max "
-        f"{max(polls) * 1000:.0f} ms) | {full_s:.2f} s | {upload_s:.1f} s |"
+        f"{max(polls) * 1000:.0f} ms) | {count_s * 1000:.0f} ms | {full_s:.2f} s | "
+        f"{upload_s:.1f} s |"
     )
+
+
+def _count_seconds(url: str, run_id: int) -> float:
+    """Median time of the ``count(*)`` of a run's fixes that each poll made before issue 15."""
+    engine = create_engine(url)
+    try:
+        times = []
+        with engine.connect() as conn:
+            for _ in range(5):
+                started = time.perf_counter()
+                conn.execute(
+                    text("SELECT count(*) FROM fixes WHERE run_id = :r"), {"r": run_id}
+                ).scalar_one()
+                times.append(time.perf_counter() - started)
+        return statistics.median(times)
+    finally:
+        engine.dispose()
 
 
 def run() -> str:
     """Measure on SQLite and (if configured) PostgreSQL; return the Markdown section."""
     pg = _pg_url()
     load_rows, live_rows = [], []
+    loads = [_load_average()]
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         for workers in (1, 2):
@@ -188,21 +238,33 @@ def run() -> str:
             if pg:
                 with scratch_pg_database(pg, prefix="tillpath_bench") as url:
                     load_rows.append(_load_row("PostgreSQL", url, workers, tmp / "load.log"))
-        memory_row = _upload_memory(tmp)
+        loads.append(_load_average())
+        memory_rows = [_upload_memory(tmp, fmt) for fmt in ("csv", "gpx")]
+        loads.append(_load_average())
         live_rows.append(_live_rows("SQLite (file, WAL)", f"sqlite:///{tmp / 'live.db'}", tmp))
         if pg:
             with scratch_pg_database(pg, prefix="tillpath_bench") as url:
                 live_rows.append(_live_rows("PostgreSQL", url, tmp))
+    loads.append(_load_average())
+    quiet = max(loads) <= 2
+    machine = (
+        f"1-minute load average (`uptime`) {min(loads):.1f}–{max(loads):.1f} during the runs"
+        + (
+            " (the 2-core machine was quiet)."
+            if quiet
+            else ": other work ran on the 2-core machine, so latencies are upper bounds."
+        )
+    )
     missing_pg = (
-        [] if pg else ["| PostgreSQL | not measured: set TILLPATH_BENCH_DATABASE_URL | | |"]
+        [] if pg else ["| PostgreSQL | not measured: set TILLPATH_BENCH_DATABASE_URL | | | |"]
     )
     return "\n".join(
         [
             "## A server that stays up: mixed load, upload memory, live reads",
             "",
             f"`tillpath serve` on loopback; {THREADS} client threads of the mixed load "
-            f"(`app/testing_load.py`) for {LOAD_S:.0f} s each; the paper field. Measured on the "
-            "shared 2-core machine while other work ran on it: latencies are upper bounds.",
+            f"(`app/testing_load.py`) for {LOAD_S:.0f} s each; the paper field. {machine} "
+            f"Command: `TILLPATH_BENCH_LOAD_S={LOAD_S:.0f} python -m bench.run bench_load`.",
             "",
             "| database | workers | requests | per s | answers ≥ 500 | p50 | p99 | "
             "acknowledged writes missing |",
@@ -211,18 +273,24 @@ def run() -> str:
             *(["| PostgreSQL | not measured: set TILLPATH_BENCH_DATABASE_URL | | | | | | |"]
               if not pg else []),
             "",
-            "Upload memory (one worker, SQLite; budget: under 300 MiB above idle):",
+            "Upload memory (one worker, SQLite; budget: under 300 MiB above idle). The server "
+            "process's peak resident memory (`VmHWM`) over its size before the upload (`VmRSS`); "
+            "the upload is parsed, stored and scored (the answer embeds the metrics, the track "
+            "thinned to 20,000 points and the stretches drawn as finely):",
             "",
             "| upload | idle RSS | peak RSS | peak above idle | time |",
             "| --- | --- | --- | --- | --- |",
-            memory_row,
+            *memory_rows,
             "",
             f"Live run of {LIVE_FIXES:,} fixes (6 h at 10 Hz): the page's poll "
-            f"(`?since=<last fix>`, median of {POLLS}; budget well under 100 ms), a full read "
-            "(scored), and the same log uploaded as a CSV file end to end:",
+            f"(`?since=<last fix>`, median of {POLLS}; budget well under 100 ms; the fix count "
+            "is read from the run's row), the `count(*)` of the run's fixes each poll made "
+            "before (for comparison, straight on the database), a full read (scored), and the "
+            "same log uploaded as a CSV file end to end:",
             "",
-            "| database | poll | full read | upload 216,000-fix CSV |",
-            "| --- | --- | --- | --- |",
+            "| database | poll | `count(*)` (no longer in a poll) | full read | "
+            "upload 216,000-fix CSV |",
+            "| --- | --- | --- | --- | --- |",
             *live_rows,
             *missing_pg,
             "",

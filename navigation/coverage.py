@@ -20,6 +20,7 @@ import numpy.typing as npt
 import shapely
 from scipy import ndimage  # type: ignore[import-untyped]
 
+from navigation.route import distance_along
 from planner.projection import LocalFrame
 from planner.types import CoveragePlan
 
@@ -30,6 +31,8 @@ TARGET_RASTER_CELLS = 250_000
 MAX_RASTER_CELLS = 4_000_000
 #: Cells are at most this fraction of the implement width.
 RASTER_CELLS_PER_INTERVAL = 8
+#: Track samples marked on the raster at a time (bounded temporaries).
+CHUNK_SAMPLES = 65_536
 
 
 def implement_width_m(plan: CoveragePlan) -> float:
@@ -76,19 +79,35 @@ def _swept(
     ny: int,
     half: float,
 ) -> npt.NDArray[np.bool_]:
-    """Cells within ``half`` of the polyline (densified to half a cell, then a distance map)."""
-    steps = np.hypot(np.diff(x_m), np.diff(y_m))
-    s = np.concatenate([[0.0], np.cumsum(steps)])
-    samples = np.linspace(0.0, s[-1], max(int(s[-1] / (0.5 * cell)) + 2, len(x_m)))
-    px = np.interp(samples, s, x_m) if s[-1] > 0 else x_m
-    py = np.interp(samples, s, y_m) if s[-1] > 0 else y_m
-    ix = np.floor((px - min_x) / cell).astype(np.int64)
-    iy = np.floor((py - min_y) / cell).astype(np.int64)
-    keep = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
-    if not keep.any():
-        return np.zeros((ny, nx), dtype=bool)
+    """Cells within ``half`` of the polyline (densified to half a cell, then a distance map).
+
+    The samples are made and marked :data:`CHUNK_SAMPLES` at a time, so a day's log needs the
+    distance along the track and the raster, not several arrays of its length.
+    """
+    s = distance_along(x_m, y_m)
+    total = float(s[-1])
+    count = max(int(total / (0.5 * cell)) + 2, len(x_m))
     free = np.ones((ny, nx), dtype=bool)
-    free[iy[keep], ix[keep]] = False
+    marked = False
+    for start in range(0, count, CHUNK_SAMPLES):
+        stop = min(start + CHUNK_SAMPLES, count)
+        if total > 0:
+            # np.linspace(0, total, count)[start:stop], made a block at a time.
+            samples = np.arange(start, stop) * (total / (count - 1))
+            if stop == count:
+                samples[-1] = total
+            px = np.interp(samples, s, x_m)
+            py = np.interp(samples, s, y_m)
+        else:
+            px, py = x_m[start:stop], y_m[start:stop]
+        ix = np.floor((px - min_x) / cell).astype(np.int64)
+        iy = np.floor((py - min_y) / cell).astype(np.int64)
+        keep = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
+        if keep.any():
+            free[iy[keep], ix[keep]] = False
+            marked = True
+    if not marked:
+        return np.zeros((ny, nx), dtype=bool)
     dist = ndimage.distance_transform_edt(free, sampling=cell)
     return np.asarray(dist <= half)
 

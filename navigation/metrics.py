@@ -38,6 +38,7 @@ from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from navigation.coverage import coverage_ratio, implement_width_m
 from navigation.coverage import polygon_mask as _polygon_mask
 from navigation.route import (
+    CHUNK_FIXES,
     LINE,
     TURN,
     Route,
@@ -193,6 +194,28 @@ class TrackMetrics:
         return asdict(self)
 
 
+def to_local_xy(
+    frame: LocalFrame, lon: FloatArray, lat: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Project a track to the local frame [m], :data:`CHUNK_FIXES` fixes at a time."""
+    n = len(lon)
+    x = np.empty(n)
+    y = np.empty(n)
+    for start in range(0, n, CHUNK_FIXES):
+        part = slice(start, min(start + CHUNK_FIXES, n))
+        x[part], y[part] = frame.to_local_xy(lon[part], lat[part])
+    return x, y
+
+
+def path_length_m(x_m: FloatArray, y_m: FloatArray) -> float:
+    """Length of the polyline through the positions [m], in blocks (bounded temporaries)."""
+    total = 0.0
+    for start in range(0, max(len(x_m) - 1, 0), CHUNK_FIXES):
+        part = slice(start, min(start + CHUNK_FIXES + 1, len(x_m)))
+        total += float(np.hypot(np.diff(x_m[part]), np.diff(y_m[part])).sum())
+    return total
+
+
 def cross_track_errors(
     route: Route, x_m: FloatArray, y_m: FloatArray, piece: IntArray
 ) -> tuple[FloatArray, FloatArray, IntArray]:
@@ -207,20 +230,27 @@ def cross_track_errors(
     line : int array
         The tillage line's index, -1 where not on a line.
     """
-    d, t = point_segment(
-        x_m, y_m, route.ax[piece], route.ay[piece], route.bx[piece], route.by[piece]
-    )
-    # Inside the piece by more than a millimetre: a fix abeam a line's end is turning.
-    margin = 1e-3 / np.maximum(route.lengths_m[piece], 1e-9)
-    inside = (t > margin) & (t < 1.0 - margin)
-    kind = route.kind[piece]
-    on_line = inside & (kind == LINE)
-    on_turn = (kind == TURN) & (t >= 0.0) & (t <= 1.0)
-    return (
-        np.where(on_line, d, np.nan),
-        np.where(on_turn, d, np.nan),
-        np.where(on_line, route.line[piece], -1),
-    )
+    n = len(x_m)
+    line_error = np.empty(n)
+    turn_error = np.empty(n)
+    lines = np.empty(n, dtype=np.int64)
+    lengths = route.lengths_m
+    for start in range(0, n, CHUNK_FIXES):  # in blocks: bounded temporaries
+        part = slice(start, min(start + CHUNK_FIXES, n))
+        p = piece[part]
+        d, t = point_segment(
+            x_m[part], y_m[part], route.ax[p], route.ay[p], route.bx[p], route.by[p]
+        )
+        # Inside the piece by more than a millimetre: a fix abeam a line's end is turning.
+        margin = 1e-3 / np.maximum(lengths[p], 1e-9)
+        inside = (t > margin) & (t < 1.0 - margin)
+        kind = route.kind[p]
+        on_line = inside & (kind == LINE)
+        on_turn = (kind == TURN) & (t >= 0.0) & (t <= 1.0)
+        line_error[part] = np.where(on_line, d, np.nan)
+        turn_error[part] = np.where(on_turn, d, np.nan)
+        lines[part] = np.where(on_line, route.line[p], -1)
+    return line_error, turn_error, lines
 
 
 def waypoint_errors(
@@ -345,9 +375,7 @@ def score_track(
 
     route = build_route(plan)
     frame = route.frame
-    x, y = frame.to_local_xy(lon_a, lat_a)
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
+    x, y = to_local_xy(frame, lon_a, lat_a)
 
     if leg is not None:
         legs = np.asarray(leg, dtype=np.int64).ravel()
@@ -357,22 +385,27 @@ def score_track(
     else:
         piece = match_monotone(route, x, y)
     xte, turn_err, line = cross_track_errors(route, x, y, piece)
+    # Progress: the furthest piece driven. A waypoint is reached once the track has been
+    # matched to a piece that starts at or after it.
+    furthest = int(piece.max())
+    del piece  # (arrays of the track's length are dropped once used: a day's log is large)
     on = ~np.isnan(xte)
+    on_line_share = float(on.mean())
     xte_max = xte_rms = xte_p95 = None
     if on.any():
         err = xte[on]
         xte_max = float(err.max())
         xte_rms = float(np.sqrt(np.mean(err**2)))
         xte_p95 = float(np.percentile(err, 95))
+        del err
+    del on
     on_turn = ~np.isnan(turn_err)
     turn_max = turn_rms = None
     if on_turn.any():
         turn_max = float(turn_err[on_turn].max())
         turn_rms = float(np.sqrt(np.mean(turn_err[on_turn] ** 2)))
+    del on_turn, turn_err
 
-    # Progress: the furthest piece driven. A waypoint is reached once the track has been
-    # matched to a piece that starts at or after it.
-    furthest = int(piece.max())
     wp_err = waypoint_errors(frame, plan, x, y)
     if completed is None:
         end_gap = math.hypot(
@@ -400,9 +433,9 @@ def score_track(
     return TrackMetrics(
         completed=completed,
         time_s=float(t[-1] - t[0]),
-        distance_m=float(np.hypot(np.diff(x), np.diff(y)).sum()),
+        distance_m=path_length_m(x, y),
         fix_count=len(t),
-        on_line_share=float(on.mean()),
+        on_line_share=on_line_share,
         cross_track_max_m=xte_max,
         cross_track_rms_m=xte_rms,
         cross_track_p95_m=xte_p95,

@@ -39,6 +39,8 @@ MAX_MATCH_SAMPLES = 6000
 MAX_MATCH_CELLS = 24_000_000
 #: Most pieces between two samples a fix is refined over.
 MAX_REFINE_SPAN = 64
+#: Fixes processed at a time where each fix is scored on its own (bounded temporaries).
+CHUNK_FIXES = 65_536
 
 
 @dataclass(frozen=True, slots=True)
@@ -192,6 +194,26 @@ def point_segment(
     return np.hypot(px - (ax + tc * dx), py - (ay + tc * dy)), t
 
 
+def distance_along(x_m: FloatArray, y_m: FloatArray) -> FloatArray:
+    """Distance travelled from the first position to each [m] (in blocks: one array's memory).
+
+    Examples
+    --------
+    >>> distance_along(np.array([0.0, 3.0, 3.0]), np.array([0.0, 4.0, 5.0])).tolist()
+    [0.0, 5.0, 6.0]
+    """
+    n = len(x_m)
+    s = np.zeros(n)
+    done = 0.0
+    for start in range(0, max(n - 1, 0), CHUNK_FIXES):
+        stop = min(start + CHUNK_FIXES, n - 1)
+        part = np.hypot(np.diff(x_m[start : stop + 1]), np.diff(y_m[start : stop + 1]))
+        np.cumsum(part, out=s[start + 1 : stop + 1])
+        s[start + 1 : stop + 1] += done
+        done = float(s[stop])
+    return s
+
+
 def match_by_leg(route: Route, x_m: FloatArray, y_m: FloatArray, leg: IntArray) -> IntArray:
     """Match each position to the nearest piece of the leg being driven.
 
@@ -252,25 +274,28 @@ def match_monotone(route: Route, x_m: FloatArray, y_m: FloatArray) -> IntArray:
     m = len(route.ax)
     if n == 0:
         return np.zeros(0, dtype=np.int64)
-    step = np.hypot(np.diff(x_m), np.diff(y_m))
-    s = np.concatenate([[0.0], np.cumsum(step)])
+    s = distance_along(x_m, y_m)
     total = float(s[-1])
     max_samples = max(2, min(MAX_MATCH_SAMPLES, MAX_MATCH_CELLS // max(m, 1)))
     spacing = max(route.spacing_m / 4.0, total / max_samples, 0.05)
     n_samples = max(int(total / spacing) + 1, 1)
     grid = np.linspace(0.0, total, n_samples) if total > 0 else np.zeros(1)
     # np.interp needs increasing abscissae: drop the fixes that did not move.
-    moved = np.concatenate([[True], step > 0])
-    sx = np.interp(grid, s[moved], x_m[moved])
-    sy = np.interp(grid, s[moved], y_m[moved])
+    moved = np.concatenate([[True], np.diff(s) > 0])
+    if moved.all():
+        s_moved, x_moved, y_moved = s, x_m, y_m
+    else:
+        s_moved, x_moved, y_moved = s[moved], x_m[moved], y_m[moved]
+    del moved
+    sx = np.interp(grid, s_moved, x_moved)
+    sy = np.interp(grid, s_moved, y_moved)
     # Direction of travel over ±2 m (or ± one sample), NaN where the track did not move.
     half = max(2.0, spacing)
-    hx = np.interp(np.minimum(grid + half, total), s[moved], x_m[moved]) - np.interp(
-        np.maximum(grid - half, 0.0), s[moved], x_m[moved]
-    )
-    hy = np.interp(np.minimum(grid + half, total), s[moved], y_m[moved]) - np.interp(
-        np.maximum(grid - half, 0.0), s[moved], y_m[moved]
-    )
+    ahead = np.minimum(grid + half, total)
+    behind = np.maximum(grid - half, 0.0)
+    hx = np.interp(ahead, s_moved, x_moved) - np.interp(behind, s_moved, x_moved)
+    hy = np.interp(ahead, s_moved, y_moved) - np.interp(behind, s_moved, y_moved)
+    del s_moved, x_moved, y_moved
     hn = np.hypot(hx, hy)
     ux = np.where(hn > 0, hx / np.maximum(hn, 1e-12), 0.0)
     uy = np.where(hn > 0, hy / np.maximum(hn, 1e-12), 0.0)
@@ -285,6 +310,25 @@ def match_monotone(route: Route, x_m: FloatArray, y_m: FloatArray) -> IntArray:
     # Each fix lies between two samples: it takes the nearest of the pieces between theirs
     # (samples are up to a few metres apart on a long track, turns may be shorter).
     step_s = grid[1] - grid[0] if len(grid) > 1 else 1.0
+    out = np.empty(n, dtype=np.int64)
+    # In blocks of fixes: the temporaries of a day's log at once would take ~15 × 8 bytes a fix.
+    for start in range(0, n, CHUNK_FIXES):
+        stop = min(start + CHUNK_FIXES, n)
+        out[start:stop] = _refine(
+            route, x_m[start:stop], y_m[start:stop], s[start:stop], step_s, path
+        )
+    return out
+
+
+def _refine(
+    route: Route,
+    x_m: FloatArray,
+    y_m: FloatArray,
+    s: FloatArray,
+    step_s: float,
+    path: IntArray,
+) -> IntArray:
+    """Match fixes to the nearest of the pieces between those of the samples around them."""
     before = np.clip(np.floor(s / step_s).astype(np.int64), 0, len(path) - 1)
     after = np.clip(before + 1, 0, len(path) - 1)
     lo = path[before]

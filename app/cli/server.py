@@ -110,10 +110,14 @@ def register(cli: typer.Typer) -> None:
         import uvicorn
 
         from app.budget import warm_up
-        from app.serving import uvicorn_options
+        from app.serving import UvicornChangedError, uvicorn_options
         from app.settings import get_settings
 
         check_tls_files(certfile, keyfile)
+        try:
+            options = uvicorn_options(get_settings())
+        except UvicornChangedError as exc:
+            fail(f"{exc}; install the locked version (pip install -r requirements.lock)")
         from app.jobs.engine import start_local_cluster
 
         shown = upgrade()
@@ -148,7 +152,7 @@ def register(cli: typer.Typer) -> None:
                 proxy_headers=True,
                 ssl_certfile=str(certfile) if certfile else None,
                 ssl_keyfile=str(keyfile) if keyfile else None,
-                **uvicorn_options(settings),
+                **options,
             )
         finally:
             if cluster is not None:

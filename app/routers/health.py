@@ -8,6 +8,7 @@ from sqlalchemy.exc import SQLAlchemyError
 
 from app.auth import public
 from app.db import SessionDep
+from app.errors import RETRY_AFTER_S
 from app.schemas import Health
 
 router = APIRouter(tags=["health"], dependencies=[Depends(public)])
@@ -20,5 +21,6 @@ def read_health(session: SessionDep, response: Response) -> Health:
         session.execute(text("SELECT 1")).scalar_one()
     except SQLAlchemyError:
         response.status_code = status.HTTP_503_SERVICE_UNAVAILABLE
+        response.headers["Retry-After"] = str(RETRY_AFTER_S)
         return Health(status="error", database="error")
     return Health(status="ok", database="ok")

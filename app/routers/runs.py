@@ -84,6 +84,7 @@ def create_run(
             "track needs the planner role"
         )
     end_reads(session)
+    track = None
     if file is None:
         run = runs.create_live_run(session, plan, name=given)
     else:
@@ -98,9 +99,12 @@ def create_run(
         run = runs.create_run_from_columns(
             session, plan, columns, source=stream.format, report=report, name=run_name
         )
+        # Scored from the columns just stored (the same fixes), not read back: one copy.
+        track = runs.track_from_columns(columns)
+        del columns, stream
     response.headers["Location"] = f"/api/runs/{run.id}"
     with heavy.slot("run"):
-        return live.full_view(session, run, threshold_m=runs.DEFAULT_THRESHOLD_M)
+        return live.full_view(session, run, threshold_m=runs.DEFAULT_THRESHOLD_M, track=track)
 
 
 @router.get("/plans/{plan_id}/runs", response_model=RunList, responses={**_NOT_FOUND, **_BAD_INPUT})

@@ -90,6 +90,50 @@ def test_every_bulk_path_stores_each_timestamp_once(engine: Engine, size: int):
         assert headings[:3] == [0.0, 1.0, 2.0]
 
 
+def stored_count(session: Session, run_id: int) -> tuple[int, int]:
+    """The run row's ``fix_count`` and the fixes counted."""
+    kept = session.scalar(select(Run.fix_count).where(Run.id == run_id))
+    counted = session.scalar(select(func.count()).select_from(Fix).where(Fix.run_id == run_id))
+    session.commit()
+    return int(kept or 0), int(counted or 0)
+
+
+@pytest.mark.parametrize("size", [10, ingest.COPY_MIN_ROWS + 10])
+def test_the_run_keeps_its_fix_count_through_retried_and_racing_batches(engine: Engine, size: int):
+    with Session(engine, expire_on_commit=False) as session:
+        plan = a_plan(session)
+        run = a_run(session, plan)
+        upload = runs.create_run_from_columns(
+            session, plan, ingest.collect(fixes(0, size)), source="csv", report={}, name="u"
+        )
+        assert stored_count(session, upload.id) == (size, size)
+    errors: list[BaseException] = []
+
+    def logger(worker: int) -> None:
+        try:
+            with Session(engine, expire_on_commit=False) as session:
+                for i in range(6):  # overlapping batches, each sent twice
+                    batch = ingest.collect(
+                        fixes((worker + i) * size // 2, (worker + i + 2) * size // 2)
+                    )
+                    for _ in range(2):
+                        write(session, lambda s, b=batch: ingest.store_fixes(s, run.id, b))
+        except BaseException as exc:  # pragma: no cover - the assertion shows it
+            errors.append(exc)
+
+    threads = [threading.Thread(target=logger, args=(w,)) for w in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+    with Session(engine) as session:
+        kept, counted = stored_count(session, run.id)
+        # Batches [(w + i) h, (w + i + 2) h) for w < 4, i < 6: the times [0, 10 h), once each.
+        assert kept == counted == 10 * (size // 2)
+        assert runs.count_fixes(session, run.id) == counted
+
+
 def test_a_new_run_copies_its_fixes_all_or_nothing(engine: Engine):
     with Session(engine, expire_on_commit=False) as session:
         plan = a_plan(session)
@@ -124,8 +168,7 @@ def test_collect_sorts_keeps_the_first_of_equal_times_and_maps_none_to_nan():
             TrackFix(T0 + 2, 1.0, 2.0),
             TrackFix(T0 + 1, 3.0, 4.0, speed_mps=1.5),
             TrackFix(T0 + 2, 9, 9),
-        ],
-        batch_rows=2,
+        ]
     )
     assert columns.t.tolist() == [T0 + 1, T0 + 2]
     assert columns.lat.tolist() == [3.0, 1.0]

@@ -100,12 +100,32 @@ def test_uploaded_simulated_run_scores_as_the_simulation(
     assert stored(session) == (1, len(run_sim.time_s))
 
 
-def test_read_run_returns_what_the_upload_answered(client: TestClient, paper_body: dict[str, Any]):
+@pytest.mark.parametrize("fmt", ["gpx", "csv", "nmea"])
+def test_read_run_returns_what_the_upload_answered(
+    client: TestClient, paper_body: dict[str, Any], fmt: str
+):
+    # The upload is scored from the columns it just stored, a read from the database: the same.
     plan = create_plan(client, paper_body)
-    created = upload(client, plan["id"], "a.csv", csv_file(simulated_run())).json()
+    created = upload(client, plan["id"], f"a.{fmt}", WRITERS[fmt](simulated_run())).json()
     again = client.get(f"/api/runs/{created['id']}")
     assert again.status_code == 200
     assert again.json() == created
+
+
+def test_stretches_are_drawn_no_finer_than_the_track(
+    client: TestClient, paper_body: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+):
+    monkeypatch.setattr("app.runs.MAX_TRACK_POINTS", 50)
+    plan = create_plan(client, paper_body)
+    run = upload(client, plan["id"], "a.csv", csv_file(simulated_run())).json()
+    view = client.get(f"/api/runs/{run['id']}", params={"threshold_m": 0.01}).json()
+    stride = math.ceil(view["fix_count"] / 50)
+    features = view["stretches"]["features"]
+    assert len(features) == len(view["metrics"]["stretches"]) > 0
+    drawn = sum(len(f["geometry"]["coordinates"]) for f in features)
+    flagged = sum(s["duration_s"] * 10 + 1 for s in view["metrics"]["stretches"])  # 10 Hz
+    assert drawn <= flagged / stride + 2 * len(features)
+    assert all(len(f["geometry"]["coordinates"]) >= 2 for f in features)
 
 
 def test_threshold_changes_the_reported_stretches(client: TestClient, paper_body: dict[str, Any]):

@@ -11,6 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from navigation import NavigationError, score_track
+from navigation import coverage as coverage_module
+from navigation import metrics as metrics_module
+from navigation import route as route_module
 from navigation.metrics import _polygon_mask
 from planner import local_frame
 
@@ -240,3 +243,35 @@ def test_a_track_offset_by_up_to_nearly_an_interval_is_measured_by_its_offset(
     lon, lat = track_lonlat(two_line_plan, x, y)
     m = score_track(two_line_plan, np.arange(len(x)) * 0.1, lon, lat)
     assert m.cross_track_max_m == pytest.approx(offset, abs=1e-3)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    steps=st.lists(st.tuples(st.floats(-50, 50), st.floats(-50, 50)), min_size=1, max_size=60),
+    chunk=st.integers(min_value=1, max_value=8),
+)
+def test_distance_along_in_blocks_is_the_running_sum_of_the_steps(steps, chunk) -> None:  # type: ignore[no-untyped-def]
+    xy = np.cumsum(np.array(steps, dtype=float), axis=0)
+    x, y = xy[:, 0], xy[:, 1]
+    expected = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(route_module, "CHUNK_FIXES", chunk)
+        got = route_module.distance_along(x, y)
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-9)
+
+
+def test_a_track_scored_in_small_blocks_scores_as_in_one(paper_plan) -> None:  # type: ignore[no-untyped-def]
+    """The blocks bounding a day's log's memory change no figure (blocks of 7 vs one)."""
+    rng = np.random.default_rng(3)
+    wps = paper_plan.waypoints
+    lon = np.repeat([w.lon for w in wps], 40) + rng.normal(0, 5e-6, 40 * len(wps))
+    lat = np.repeat([w.lat for w in wps], 40) + rng.normal(0, 5e-6, 40 * len(wps))
+    t = np.arange(len(lon)) * 0.1
+    whole = score_track(paper_plan, t, lon, lat, live=True)
+    with pytest.MonkeyPatch.context() as patch:
+        for module in (route_module, metrics_module):
+            patch.setattr(module, "CHUNK_FIXES", 7)
+        patch.setattr(coverage_module, "CHUNK_SAMPLES", 5)
+        blocks = score_track(paper_plan, t, lon, lat, live=True)
+    assert blocks == whole
+    assert whole.fix_count == len(lon) > 7 and whole.coverage_ratio > 0
