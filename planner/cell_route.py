@@ -28,6 +28,81 @@ from planner.types import Pattern, Vehicle
 FloatArray = npt.NDArray[np.float64]
 
 
+#: Fitted lines of a plan's cells by ``(cell, variant)``, before numbering.
+CellFits = dict[tuple[int, int], FittedLines]
+
+
+def fit_cell(
+    plan: CellPlan,
+    cell_index: int,
+    variant: int,
+    *,
+    vehicle: Vehicle,
+    skip: int,
+    room: Polygon | MultiPolygon | None,
+) -> FittedLines:
+    """Order one cell's lines by ``variant`` and pull their ends back until the turns fit.
+
+    ``room`` is the turning room already in the heading's sweep frame (or None: the cell).
+    """
+    cell = plan.cells[cell_index]
+    k = cell.lines
+    scan = plan.scan
+    u, lo, hi = scan.u[k], scan.v_lo[k], scan.v_hi[k]
+    n = len(u)
+    if skip > 1:
+        index, up = order_snake(n, variant, skip=skip)
+    else:
+        index, up = order_boustrophedon(n, variant)
+    return fit_lines(
+        u[index],
+        np.where(up, lo[index], hi[index]),
+        np.where(up, hi[index], lo[index]),
+        index,
+        machine=room_chains(cell, room),
+        vehicle=vehicle,
+    )
+
+
+def fit_cells(
+    plan: CellPlan,
+    *,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    interval_m: float,
+    turning_room: Polygon | MultiPolygon | None = None,
+    fits: CellFits | None = None,
+) -> list[FittedLines]:
+    """Fit every cell of ``plan`` in its driving order (see :func:`add_cells`).
+
+    ``fits`` holds cells fitted before, by ``(cell, variant)``; new fits are added to it.
+    """
+    fits = {} if fits is None else fits
+    skip = snake_skip(vehicle, interval_m) if pattern == "snake" else 1
+    room = None if turning_room is None else to_sweep_frame(turning_room, plan.heading_deg)
+    out = []
+    for cell_index, variant in plan.order:
+        key = (cell_index, variant)
+        if key not in fits:
+            fits[key] = fit_cell(plan, cell_index, variant, vehicle=vehicle, skip=skip, room=room)
+        out.append(fits[key])
+    return out
+
+
+def to_sweep_frame(geometry: Polygon | MultiPolygon, heading: float) -> Polygon | MultiPolygon:
+    """Rotate ``geometry`` from local ``x, y`` into the sweep frame ``u, v`` of ``heading``."""
+    theta = math.radians(heading)
+    cos_t, sin_t = math.cos(theta), math.sin(theta)
+
+    def to_uv(xy: FloatArray) -> FloatArray:
+        return np.stack(
+            [xy[:, 0] * cos_t - xy[:, 1] * sin_t, xy[:, 0] * sin_t + xy[:, 1] * cos_t], 1
+        )
+
+    rotated: Polygon | MultiPolygon = shapely.transform(geometry, to_uv)
+    return rotated
+
+
 def add_cells(
     route: RouteBuilder,
     plan: CellPlan,
@@ -37,6 +112,7 @@ def add_cells(
     pattern: Pattern,
     interval_m: float,
     turning_room: Polygon | MultiPolygon | None = None,
+    fits: CellFits | None = None,
 ) -> list[FittedLines]:
     """Append every cell's lines and turns, and the moves between cells, to ``route``.
 
@@ -47,27 +123,17 @@ def add_cells(
     Returns the fitted lines of every cell, in driving order (sweep frame of the heading).
     """
     heading = plan.heading_deg
-    scan = plan.scan
-    skip = snake_skip(vehicle, interval_m) if pattern == "snake" else 1
     first_index = 0
     fitted: list[FittedLines] = []
-    for cell_index, variant in plan.order:
-        cell = plan.cells[cell_index]
-        k = cell.lines
-        u, lo, hi = scan.u[k], scan.v_lo[k], scan.v_hi[k]
-        n = len(u)
-        if skip > 1:
-            index, up = order_snake(n, variant, skip=skip)
-        else:
-            index, up = order_boustrophedon(n, variant)
-        fit = fit_lines(
-            u[index],
-            np.where(up, lo[index], hi[index]),
-            np.where(up, hi[index], lo[index]),
-            index,
-            machine=room_chains(cell, heading, turning_room),
-            vehicle=vehicle,
-        )
+    cell_fits = fit_cells(
+        plan,
+        vehicle=vehicle,
+        pattern=pattern,
+        interval_m=interval_m,
+        turning_room=turning_room,
+        fits=fits,
+    )
+    for fit in cell_fits:
         if len(fit.u) == 0:
             fitted.append(fit)  # one entry per cell, in driving order
             continue
@@ -89,22 +155,16 @@ def add_cells(
     return fitted
 
 
-def room_chains(cell: Cell, heading: float, turning_room: Polygon | MultiPolygon | None) -> Chains:
+def room_chains(cell: Cell, room: Polygon | MultiPolygon | None) -> Chains:
     """Return the chains a cell's turns must stay within: the machine area over its span.
 
-    The piece of ``turning_room`` over the cell's ``u``-range that holds the cell, if it is
-    one simple sweep-monotone polygon; else (or without ``turning_room``) the cell itself.
+    The piece of ``room`` (the turning room in the heading's sweep frame) over the cell's
+    ``u``-range that holds the cell, if it is one simple sweep-monotone polygon; else (or
+    without ``room``) the cell itself.
     """
-    if turning_room is None:
+    if room is None:
         return cell.chains
     c = cell.chains
-    theta = math.radians(heading)
-    cos_t, sin_t = math.cos(theta), math.sin(theta)
-
-    def to_uv(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return x * cos_t - y * sin_t, x * sin_t + y * cos_t
-
-    room = shapely.transform(turning_room, lambda xy: np.stack(to_uv(xy[:, 0], xy[:, 1]), 1))
     big = 1e7
     strip = shapely.box(c.u_min, -big, c.u_max, big)
     middle = shapely.Point(

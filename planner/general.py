@@ -22,9 +22,11 @@ from shapely import Polygon
 
 from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
-from planner.cell_plans import CellPlan, better, plan_heading, reach_headland, reorder
-from planner.cell_route import add_cells
+from planner.cell_plans import CellPlan, plan_heading, reach_headland, reorder
+from planner.cell_route import CellFits, add_cells
 from planner.errors import PlanTooLargeError
+from planner.fitted_cells import FittedCells, choose_cells, fit_candidate
+from planner.fitted_choice import edge_headings
 from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
 from planner.heading_search import score_headings
 from planner.headland_route import add_headland, first_ring_point, ring_order
@@ -57,6 +59,8 @@ CONVEXITY_TOLERANCE_M = 1e-3
 FULL_PLANS = 6
 #: ... plus this many of the best headings by the other ranking (line count or estimate).
 EXTRA_PLANS = 1
+#: ... plus the headings nearest the directions of this many of the longest edges.
+EDGE_PLANS = 3
 #: Beyond this many turn-backs (about as many cells) only the best heading is planned in full.
 MANY_TURN_BACKS = 200
 #: Inner-area parts smaller than this are dropped (slivers between headland passes) [m²].
@@ -166,6 +170,8 @@ def plan_general(
     after_lines = first_ring_point(rings[-1]) if rings else finish_xy
 
     best: CellPlan | None = None
+    fits: CellFits = {}
+    turning_room = area if headland_passes else None
     given_up_pp = 0.0
     if parts:
         exterior = np.asarray(field_local.exterior.coords)[:-1]
@@ -198,26 +204,49 @@ def plan_general(
         ranked = list(
             dict.fromkeys([*first.tolist(), *second[:EXTRA_PLANS].tolist(), *by_coverage.tolist()])
         )
+        if len(ranked) > 1:
+            # The cheap figures misjudge fitted lines most along the long edges (their
+            # lines end square): those directions are planned in full too.
+            near = np.abs(
+                (headings[:, None] - edge_headings(exterior)[None, :] + 90.0) % 180.0 - 90.0
+            )
+            ranked = list(dict.fromkeys([*ranked, *np.argmin(near, axis=0)[:EDGE_PLANS].tolist()]))
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
-        candidates = [
+        cheap = [
             plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge) for a in ranked
         ]
-        best_covered = max(c.covered_m2 for c in candidates)
+        if rings:
+            cheap = [reach_headland(c, d) for c in cheap]
+        # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
+        # the close ones fitted (ends pulled back, lines dropped, the implement's width)
+        # and the rule applied to those (planner.fitted_cells).
         slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
-        for candidate in candidates:
-            if candidate.covered_m2 < best_covered - slack_m2:
-                continue
-            if best is None or better(candidate, best, objective):
-                best = candidate
-        if best is not None:
-            given_up_pp = (best_covered - best.covered_m2) / float(field_local.area) * 100.0
-            # Round holes a straight line is a poor guess of a move between cells: the
-            # winner's few cells are reordered with routed moves (many cells cost too much).
-            routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
-            best = reorder(best, start_xy, after_lines, router.distances if routed else None)
-            if rings:
-                best = reach_headland(best, d)
+
+        def fit(plan: CellPlan) -> FittedCells:
+            return fit_candidate(
+                plan,
+                field_local=field_local,
+                area=area,
+                interval_m=d,
+                implement_width_m=implement,
+                vehicle=machine,
+                pattern=pattern,
+                turning_room=turning_room,
+                start_xy=start_xy,
+                finish_xy=after_lines,
+            )
+
+        chosen, given_up_m2 = choose_cells(
+            cheap, objective, slack_m2=slack_m2, fit=fit, vehicle=machine, interval_m=d
+        )
+        fits = chosen.fits
+        best = chosen.plan
+        given_up_pp = given_up_m2 / float(field_local.area) * 100.0
+        # Round holes a straight line is a poor guess of a move between cells: the
+        # winner's few cells are reordered with routed moves (many cells cost too much).
+        routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
+        best = reorder(best, start_xy, after_lines, router.distances if routed else None)
 
     route = RouteBuilder()
     if start_xy is not None:
@@ -235,7 +264,8 @@ def plan_general(
             vehicle=machine,
             pattern=pattern,
             interval_m=d,
-            turning_room=area if headland_passes else None,
+            turning_room=turning_room,
+            fits=fits,
         )
         line_count = sum(len(fit.u) for fit in fitted)
         for cell_index, _ in best.order:
