@@ -1,7 +1,7 @@
 """Plan any field, convex or not, with or without holes: cells, lines, order, routed moves.
 
-The stages: headland passes (around the exterior and every hole) leave an inner area; the
-best few headings by :mod:`planner.heading_search` are decomposed into cells
+The stages, one module each: headland passes (around the exterior and every hole) leave
+an inner area; the best few headings by :mod:`planner.heading_search` are decomposed into cells
 (:mod:`planner.decomposition`); each cell gets its lines (:func:`planner.lines.scan_cells`:
 R2 and R3 per cell) and its four variants
 (:mod:`planner.ordering`); and the cells are ordered (:mod:`planner.cell_order`). The winning
@@ -13,34 +13,42 @@ holes (:mod:`planner.routing`). Everything here is in local metres;
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 import shapely
-from shapely import LinearRing, MultiPolygon, Polygon
+from shapely import Polygon
 
 from planner import angles
-from planner.cell_order import EXHAUSTIVE_MAX_CELLS, CellVariants, order_cells
-from planner.coverage import Chains, cell_area, convex_chains, covered_area
-from planner.decomposition import decompose_sweep
+from planner.cell_order import EXHAUSTIVE_MAX_CELLS
+from planner.cell_plans import CellPlan, plan_heading, reach_headland, reorder
+from planner.cell_route import CellFits, add_cells
 from planner.errors import PlanTooLargeError
+from planner.fitted_cells import FittedCells, choose_cells, fit_candidate
+from planner.fitted_choice import edge_headings
+from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
 from planner.heading_search import score_headings
+from planner.headland_route import add_headland, first_ring_point, ring_order
 from planner.headlands import headland_ring_sets, inner_parts
-from planner.line_ends import FittedLines, fit_lines, machine_area, snake_skip
-from planner.lines import LineScan, from_sweep, scan_cells
-from planner.ordering import (
-    order_boustrophedon,
-    order_snake,
-    variant_ends,
-    variant_lengths,
-)
+from planner.line_ends import FittedLines, machine_area
+from planner.lines import from_sweep
+from planner.route_builder import RouteBuilder, add_fitted_lines, densify
 from planner.routing import FieldRouter
-from planner.turns import STEP_M, TurnEnds, turning_radius_m, vehicle_turns
-from planner.types import Objective, Pattern, SegmentKind, Vehicle, WaypointRole
+from planner.turns import turning_radius_m
+from planner.types import Objective, Pattern, Vehicle
 from planner.vehicles import resolve_vehicle
+
+__all__ = [
+    "GeneralPlan",
+    "RouteBuilder",
+    "add_fitted_lines",
+    "densify",
+    "inner_parts",
+    "is_convex",
+    "line_footprints",
+    "plan_general",
+]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -51,59 +59,12 @@ CONVEXITY_TOLERANCE_M = 1e-3
 FULL_PLANS = 6
 #: ... plus this many of the best headings by the other ranking (line count or estimate).
 EXTRA_PLANS = 1
+#: ... plus the headings nearest the directions of this many of the longest edges.
+EDGE_PLANS = 3
 #: Beyond this many turn-backs (about as many cells) only the best heading is planned in full.
 MANY_TURN_BACKS = 200
-#: ``move_m(exits, entries)``: lengths [m] of the moves from every exit to every entry.
-MoveCost = Callable[[FloatArray, FloatArray], FloatArray]
-#: Grid that footprint unions snap to [m] (see :func:`plan_general`).
-UNION_GRID_M = 1e-6
 #: Inner-area parts smaller than this are dropped (slivers between headland passes) [m²].
 _SLIVER_M2 = 1e-6
-
-
-@dataclass
-class RouteBuilder:
-    """A route under construction, local [m], with the role and line of every point.
-
-    ``segments`` holds ``(kind, index, first waypoint, last waypoint)``; a segment shares its
-    end points with its neighbours.
-    """
-
-    x: list[float] = field(default_factory=list)
-    y: list[float] = field(default_factory=list)
-    roles: list[WaypointRole] = field(default_factory=list)
-    lines: list[int | None] = field(default_factory=list)
-    segments: list[tuple[SegmentKind, int | None, int, int]] = field(default_factory=list)
-
-    def here(self) -> tuple[float, float] | None:
-        """Return the last point, or None if the route is empty."""
-        return (self.x[-1], self.y[-1]) if self.x else None
-
-    def append(
-        self,
-        kind: SegmentKind,
-        index: int | None,
-        points: FloatArray,
-        role: WaypointRole,
-        line: int | None = None,
-        *,
-        last_role: WaypointRole | None = None,
-    ) -> None:
-        """Add a segment through ``points``, joined to the route's last point if any.
-
-        If the route is not empty, ``points[0]`` must be its last point (it is not repeated).
-        """
-        first = len(self.x) - 1 if self.x else 0
-        new = points[1:] if self.x else points
-        roles = [role] * len(new)
-        if last_role is not None and roles:
-            roles[-1] = last_role
-        self.x.extend(new[:, 0].tolist())
-        self.y.extend(new[:, 1].tolist())
-        self.roles.extend(roles)
-        self.lines.extend([line] * len(new))
-        if len(self.x) - 1 > first:
-            self.segments.append((kind, index, first, len(self.x) - 1))
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,27 +92,6 @@ class GeneralPlan:
     coverage_ratio: float
     lines_coverage_ratio: float
     coverage_given_up_pp: float = 0.0
-
-
-@dataclass(frozen=True, slots=True)
-class _Cell:
-    u_ring: FloatArray
-    v_ring: FloatArray
-    chains: Chains
-    lines: slice
-
-
-@dataclass(frozen=True, slots=True)
-class _Candidate:
-    heading_deg: float
-    cells: list[_Cell]
-    scan: LineScan
-    variants: CellVariants
-    working_m: float
-    order: list[tuple[int, int]]
-    length_m: float
-    line_count: int
-    covered_m2: float
 
 
 def plan_general(
@@ -227,9 +167,11 @@ def plan_general(
     router = FieldRouter(area if isinstance(area, Polygon) else field_local)
     # Lines half an interval inside the field: less than that inside the machine area.
     edge = d / 2.0 if headland_passes else max((d - width) / 2.0, d / 4.0)
-    after_lines = _first_ring_point(rings[-1]) if rings else finish_xy
+    after_lines = first_ring_point(rings[-1]) if rings else finish_xy
 
-    best: _Candidate | None = None
+    best: CellPlan | None = None
+    fits: CellFits = {}
+    turning_room = area if headland_passes else None
     given_up_pp = 0.0
     if parts:
         exterior = np.asarray(field_local.exterior.coords)[:-1]
@@ -262,26 +204,49 @@ def plan_general(
         ranked = list(
             dict.fromkeys([*first.tolist(), *second[:EXTRA_PLANS].tolist(), *by_coverage.tolist()])
         )
+        if len(ranked) > 1:
+            # The cheap figures misjudge fitted lines most along the long edges (their
+            # lines end square): those directions are planned in full too.
+            near = np.abs(
+                (headings[:, None] - edge_headings(exterior)[None, :] + 90.0) % 180.0 - 90.0
+            )
+            ranked = list(dict.fromkeys([*ranked, *np.argmin(near, axis=0)[:EDGE_PLANS].tolist()]))
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
-        candidates = [
-            _plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge) for a in ranked
+        cheap = [
+            plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge) for a in ranked
         ]
-        best_covered = max(c.covered_m2 for c in candidates)
+        if rings:
+            cheap = [reach_headland(c, d) for c in cheap]
+        # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
+        # the close ones fitted (ends pulled back, lines dropped, the implement's width)
+        # and the rule applied to those (planner.fitted_cells).
         slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
-        for candidate in candidates:
-            if candidate.covered_m2 < best_covered - slack_m2:
-                continue
-            if best is None or _better(candidate, best, objective):
-                best = candidate
-        if best is not None:
-            given_up_pp = (best_covered - best.covered_m2) / float(field_local.area) * 100.0
-            # Round holes a straight line is a poor guess of a move between cells: the
-            # winner's few cells are reordered with routed moves (many cells cost too much).
-            routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
-            best = _reorder(best, start_xy, after_lines, router.distances if routed else None)
-            if rings:
-                best = _reach_headland(best, d)
+
+        def fit(plan: CellPlan) -> FittedCells:
+            return fit_candidate(
+                plan,
+                field_local=field_local,
+                area=area,
+                interval_m=d,
+                implement_width_m=implement,
+                vehicle=machine,
+                pattern=pattern,
+                turning_room=turning_room,
+                start_xy=start_xy,
+                finish_xy=after_lines,
+            )
+
+        chosen, given_up_m2 = choose_cells(
+            cheap, objective, slack_m2=slack_m2, fit=fit, vehicle=machine, interval_m=d
+        )
+        fits = chosen.fits
+        best = chosen.plan
+        given_up_pp = given_up_m2 / float(field_local.area) * 100.0
+        # Round holes a straight line is a poor guess of a move between cells: the
+        # winner's few cells are reordered with routed moves (many cells cost too much).
+        routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
+        best = reorder(best, start_xy, after_lines, router.distances if routed else None)
 
     route = RouteBuilder()
     if start_xy is not None:
@@ -292,14 +257,15 @@ def plan_general(
     fitted: list[FittedLines] = []
     if best is not None:
         heading = best.heading_deg
-        fitted = _add_cells(
+        fitted = add_cells(
             route,
             best,
             router,
             vehicle=machine,
             pattern=pattern,
             interval_m=d,
-            turning_room=area if headland_passes else None,
+            turning_room=turning_room,
+            fits=fits,
         )
         line_count = sum(len(fit.u) for fit in fitted)
         for cell_index, _ in best.order:
@@ -307,16 +273,16 @@ def plan_general(
             x, y = from_sweep(cell.u_ring, cell.v_ring, heading)
             cells_local.append(Polygon(np.stack([x, y], axis=1)))
     for pass_index in reversed(range(len(rings))):
-        ordered = _ring_order(rings[pass_index], route.here())
+        ordered = ring_order(rings[pass_index], route.here())
         for ring_index, ring in enumerate(ordered):
             # The last round goes on to the point nearest the finish, so the tractor leaves
             # from the headland instead of crossing the tilled field.
             last = pass_index == 0 and ring_index == len(ordered) - 1
-            _add_headland(route, ring, pass_index, router, end_near=finish_xy if last else None)
+            add_headland(route, ring, pass_index, router, end_near=finish_xy if last else None)
 
     field_area = float(field_local.area)
-    lines_covered = _lines_covered(best, fitted, field_local, area, heading, implement)
-    covered = lines_covered
+    lines_m2 = lines_covered(best, fitted, field_local, area, heading, implement)
+    covered = lines_m2
     if rings:
         # Headland passes: the whole union, exactly (a few rings and the lines' boxes).
         passes_union = shapely.union_all(
@@ -337,64 +303,9 @@ def plan_general(
         line_count=line_count,
         cells_local=cells_local,
         coverage_ratio=min(covered / field_area, 1.0),
-        lines_coverage_ratio=min(lines_covered / field_area, 1.0),
+        lines_coverage_ratio=min(lines_m2 / field_area, 1.0),
         coverage_given_up_pp=max(given_up_pp, 0.0),
     )
-
-
-def _lines_covered(
-    plan: _Candidate | None,
-    fitted: list[FittedLines],
-    field_local: Polygon,
-    area: Polygon | MultiPolygon,
-    heading: float,
-    width_m: float,
-) -> float:
-    """Area of the field the lines' footprints cover (R4) [m²].
-
-    Inside each cell (a piece of the machine area) exactly, by its chains. Beyond the cells
-    lies the band half a vehicle wide along the boundary: the outermost line of a cell may
-    till a strip of it, which is added with shapely (two boxes per cell). The corners of
-    footprints that poke past a slanted line end are not counted (a slight underestimate).
-    """
-    if plan is None or not fitted:
-        return 0.0
-    total = 0.0
-    outer: list[FittedLines] = []
-    for (cell_index, _), fit in zip(plan.order, fitted, strict=True):
-        if len(fit.u) == 0:
-            continue
-        cell = plan.cells[cell_index]
-        order = np.argsort(fit.u, kind="stable")
-        u, a, b = fit.u[order], fit.v_start[order], fit.v_end[order]
-        total += covered_area(cell.chains, u, np.minimum(a, b), np.maximum(a, b), width_m)
-        ends = order[[0, -1]]
-        outer.append(replace(fit, u=fit.u[ends], v_start=fit.v_start[ends], v_end=fit.v_end[ends]))
-    boxes = np.asarray(line_footprints(outer, heading, width_m))
-    if len(boxes):
-        shapely.prepare(area)
-        out = boxes[~shapely.contains(area, boxes)]
-        if len(out):
-            reach = shapely.union_all(out, grid_size=UNION_GRID_M)
-            band = shapely.intersection(field_local, reach).area
-            total += float(band - shapely.intersection(area, reach).area)
-    return total
-
-
-def line_footprints(fitted: list[FittedLines], heading: float, width_m: float) -> list[Polygon]:
-    """Footprints of the fitted lines (R4): rectangles ``width_m`` wide, flat ends, local."""
-    if not fitted:
-        return []
-    u = np.concatenate([f.u for f in fitted])
-    a = np.concatenate([f.v_start for f in fitted])
-    b = np.concatenate([f.v_end for f in fitted])
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    half = width_m / 2.0
-    cu = np.stack([u - half, u + half, u + half, u - half], axis=1)
-    cv = np.stack([lo, lo, hi, hi], axis=1)
-    x, y = from_sweep(cu, cv, heading)
-    boxes = np.asarray(shapely.polygons(np.stack([x, y], axis=2)))
-    return list(boxes[hi > lo])
 
 
 def is_convex(field_local: Polygon) -> bool:
@@ -415,421 +326,3 @@ def is_convex(field_local: Polygon) -> bool:
         return False
     depth_m = shapely.hausdorff_distance(field_local.exterior, hull.exterior)
     return bool(depth_m <= CONVEXITY_TOLERANCE_M)
-
-
-def _better(candidate: _Candidate, best: _Candidate, objective: Objective) -> bool:
-    if objective == "fewest_lines" and candidate.line_count != best.line_count:
-        return candidate.line_count < best.line_count
-    return candidate.length_m < best.length_m - 1e-6
-
-
-def _plan_heading(
-    parts: list[Polygon],
-    heading: float,
-    d: float,
-    start_xy: tuple[float, float] | None,
-    finish_xy: tuple[float, float] | None,
-    edge_m: float,
-) -> _Candidate:
-    """Decompose, scan and order the cells at one heading; turns and moves straight."""
-    rings = [ring for part in parts for ring in decompose_sweep(part, heading)]
-    scan = scan_cells(rings, d, edge_m=edge_m)
-    cells = [
-        _Cell(
-            u_ring,
-            v_ring,
-            convex_chains(u_ring, v_ring),
-            slice(scan.offsets[c], scan.offsets[c + 1]),
-        )
-        for c, (u_ring, v_ring) in enumerate(rings)
-    ]
-    lengths = variant_lengths(scan, None, None)
-    eu, ev, xu, xv = variant_ends(scan)
-    entry = np.stack(from_sweep(eu, ev, heading), axis=2)
-    exit_ = np.stack(from_sweep(xu, xv, heading), axis=2)
-    variants = CellVariants(entry, exit_, lengths.turns)
-    working = float(lengths.working.sum())
-    order = order_cells(variants, start_xy, finish_xy, improve=False)
-    length = working + _order_length(variants, order, start_xy, finish_xy, None)
-    covered = sum(
-        covered_area(c.chains, scan.u[c.lines], scan.v_lo[c.lines], scan.v_hi[c.lines], d)
-        for c in cells
-    )
-    return _Candidate(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
-
-
-def _reach_headland(plan: _Candidate, d: float) -> _Candidate:
-    """Lengthen each line so that its whole footprint reaches the headland's inner edge.
-
-    A line ends where it meets the cell's chain, but a slanted chain leaves an untilled
-    triangle beside that end. With headland passes, every point within ``d / 2`` of the
-    inner area lies in the headland band, inside the field; so each end moves out to the
-    farthest the chain reaches across the footprint's width (``u ± d / 2``), and the
-    footprint covers the inner area up to its edge. Turns and coverage follow the new ends.
-    """
-    scan = plan.scan
-    v_lo, v_hi = scan.v_lo.copy(), scan.v_hi.copy()
-    half = d / 2.0
-    for cell in plan.cells:
-        k = cell.lines
-        u = scan.u[k]
-        left = np.maximum(u - half, cell.chains.u_min)
-        right = np.minimum(u + half, cell.chains.u_max)
-        c = cell.chains
-        top = np.maximum(np.interp(left, c.hi_u, c.hi_v), np.interp(right, c.hi_u, c.hi_v))
-        bottom = np.minimum(np.interp(left, c.lo_u, c.lo_v), np.interp(right, c.lo_u, c.lo_v))
-        for chain_u, chain_v, target, pick in (
-            (c.hi_u, c.hi_v, top, np.maximum),
-            (c.lo_u, c.lo_v, bottom, np.minimum),
-        ):
-            first = np.searchsorted(u, chain_u - half, side="left")
-            stop = np.searchsorted(u, chain_u + half, side="right")
-            for shift in range(3):
-                line = first + shift
-                ok = line < stop
-                pick.at(target, line[ok], chain_v[ok])
-        v_hi[k] = np.maximum(v_hi[k], top)
-        v_lo[k] = np.minimum(v_lo[k], bottom)
-    longer = LineScan(scan.headings_deg, scan.offsets, scan.u, v_lo, v_hi)
-    return _Candidate(
-        plan.heading_deg,
-        plan.cells,
-        longer,
-        plan.variants,
-        plan.working_m,
-        plan.order,
-        plan.length_m,
-        plan.line_count,
-        plan.covered_m2,
-    )
-
-
-def _reorder(
-    plan: _Candidate,
-    start_xy: tuple[float, float] | None,
-    finish_xy: tuple[float, float] | None,
-    move_m: MoveCost | None,
-) -> _Candidate:
-    """Return the winning heading with its cell order improved (by ``move_m`` if given)."""
-    order = order_cells(plan.variants, start_xy, finish_xy, improve=True, move_m=move_m)
-    length = plan.working_m + _order_length(plan.variants, order, start_xy, finish_xy, move_m)
-    before = plan.working_m + _order_length(plan.variants, plan.order, start_xy, finish_xy, move_m)
-    if length >= before:
-        return plan
-    return _Candidate(
-        plan.heading_deg,
-        plan.cells,
-        plan.scan,
-        plan.variants,
-        plan.working_m,
-        order,
-        length,
-        plan.line_count,
-        plan.covered_m2,
-    )
-
-
-def _order_length(
-    cells: CellVariants,
-    order: list[tuple[int, int]],
-    start_xy: tuple[float, float] | None,
-    finish_xy: tuple[float, float] | None,
-    move_m: MoveCost | None,
-) -> float:
-    total = sum(float(cells.inner_m[c, w]) for c, w in order)
-    points = [cells.entry_xy[c, w] for c, w in order]
-    if len(order) > 1:
-        exits = np.asarray([cells.exit_xy[c, w] for c, w in order[:-1]])
-        entries = np.asarray([cells.entry_xy[c, w] for c, w in order[1:]])
-        if move_m is None:
-            total += float(np.hypot(*(entries - exits).T).sum())
-        else:
-            total += float(np.trace(move_m(exits, entries)))
-    if start_xy is not None:
-        total += float(np.hypot(*(points[0] - np.asarray(start_xy))))
-    if finish_xy is not None:
-        c, w = order[-1]
-        total += float(np.hypot(*(cells.exit_xy[c, w] - np.asarray(finish_xy))))
-    return total
-
-
-def _add_cells(
-    route: RouteBuilder,
-    plan: _Candidate,
-    router: FieldRouter,
-    *,
-    vehicle: Vehicle,
-    pattern: Pattern,
-    interval_m: float,
-    turning_room: Polygon | MultiPolygon | None = None,
-) -> list[FittedLines]:
-    """Append every cell's lines and turns, and the moves between cells, to ``route``.
-
-    Each cell's lines are ordered (back and forth, or snake), then their ends are pulled
-    back until the vehicle's turns fit the cell (:func:`planner.line_ends.fit_lines`), or,
-    with headland passes, the machine area beyond the cell (``turning_room``): the turns
-    swing out over the headland, as a tractor turns on the headland it then tills.
-    Returns the fitted lines of every cell, in driving order (sweep frame of the heading).
-    """
-    heading = plan.heading_deg
-    scan = plan.scan
-    skip = snake_skip(vehicle, interval_m) if pattern == "snake" else 1
-    first_index = 0
-    fitted: list[FittedLines] = []
-    for cell_index, variant in plan.order:
-        cell = plan.cells[cell_index]
-        k = cell.lines
-        u, lo, hi = scan.u[k], scan.v_lo[k], scan.v_hi[k]
-        n = len(u)
-        if skip > 1:
-            index, up = order_snake(n, variant, skip=skip)
-        else:
-            index, up = order_boustrophedon(n, variant)
-        fit = fit_lines(
-            u[index],
-            np.where(up, lo[index], hi[index]),
-            np.where(up, hi[index], lo[index]),
-            index,
-            machine=_room_chains(cell, heading, turning_room),
-            vehicle=vehicle,
-        )
-        if len(fit.u) == 0:
-            fitted.append(fit)  # one entry per cell, in driving order
-            continue
-        # Lines the turns could not reach are gone: number the rest left to right.
-        rank = np.argsort(np.argsort(fit.index, kind="stable"), kind="stable")
-        fit = replace(fit, index=(first_index + rank).astype(np.int64))
-        fitted.append(fit)
-        x0, y0 = from_sweep(fit.u[0], fit.v_start[0], heading)
-        target = (float(x0), float(y0))
-        here = route.here()
-        joined = False
-        if here is not None and route.roles[-1] != "start":
-            rising = bool(fit.v_end[0] >= fit.v_start[0])
-            move = _move(route, target, rising, heading, router, vehicle)
-            route.append("turn", None, move, "turn")
-            joined = True
-        add_fitted_lines(route, heading, fit, joined=joined)
-        first_index += len(fit.u)
-    return fitted
-
-
-def _room_chains(
-    cell: _Cell, heading: float, turning_room: Polygon | MultiPolygon | None
-) -> Chains:
-    """Return the chains a cell's turns must stay within: the machine area over its span.
-
-    The piece of ``turning_room`` over the cell's ``u``-range that holds the cell, if it is
-    one simple sweep-monotone polygon; else (or without ``turning_room``) the cell itself.
-    """
-    if turning_room is None:
-        return cell.chains
-    c = cell.chains
-    theta = math.radians(heading)
-    cos_t, sin_t = math.cos(theta), math.sin(theta)
-
-    def to_uv(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return x * cos_t - y * sin_t, x * sin_t + y * cos_t
-
-    room = shapely.transform(turning_room, lambda xy: np.stack(to_uv(xy[:, 0], xy[:, 1]), 1))
-    big = 1e7
-    strip = shapely.box(c.u_min, -big, c.u_max, big)
-    middle = shapely.Point(
-        (c.u_min + c.u_max) / 2.0,
-        (
-            float(np.interp((c.u_min + c.u_max) / 2.0, c.lo_u, c.lo_v))
-            + float(np.interp((c.u_min + c.u_max) / 2.0, c.hi_u, c.hi_v))
-        )
-        / 2.0,
-    )
-    for piece in shapely.get_parts(shapely.intersection(room, strip)):
-        if not isinstance(piece, Polygon) or piece.interiors or not piece.covers(middle):
-            continue
-        ring = np.asarray(shapely.orient_polygons(piece).exterior.coords)[:-1]
-        chains = convex_chains(ring[:, 0], ring[:, 1])
-        # Sweep-monotone exactly when the area between the two chains is the piece's area.
-        if abs(cell_area(chains) - piece.area) <= 1e-6 * piece.area + 1e-6:
-            return chains
-    return cell.chains
-
-
-def _move(
-    route: RouteBuilder,
-    target: tuple[float, float],
-    up: bool,
-    heading: float,
-    router: FieldRouter,
-    vehicle: Vehicle,
-) -> FloatArray:
-    """Plan the move from the route's last line end to another cell's first line start.
-
-    The vehicle's own turn (a Dubins or pivot curve from pose to pose) if it stays inside the
-    machine area, else the shortest path inside it, with points at most 0.5 m apart (its
-    corners are turned on the spot or as tight as the vehicle can).
-    """
-    here = np.array([route.x[-1], route.y[-1]])
-    before = np.array([route.x[-2], route.y[-2]]) if len(route.x) > 1 else here
-    if route.roles[-1] == "line_end" and np.hypot(*(here - before)) > 1e-9:
-        yaw0 = math.atan2(here[1] - before[1], here[0] - before[0])
-        # Lines run along the heading: +v is (sin h, cos h) in local x, y.
-        theta = math.radians(heading)
-        along = math.atan2(math.cos(theta), math.sin(theta))
-        yaw1 = along if up else along + math.pi
-        ends = TurnEnds(
-            np.array([here[0]]),
-            np.array([here[1]]),
-            np.array([yaw0]),
-            np.array([target[0]]),
-            np.array([target[1]]),
-            np.array([yaw1]),
-        )
-        curve = vehicle_turns(ends, vehicle).curve(0)
-        if len(curve) >= 2 and router.inside(curve[:-1], curve[1:]).all():
-            return curve
-    return densify(router.path((float(here[0]), float(here[1])), target), STEP_M)
-
-
-def densify(points: FloatArray, step_m: float) -> FloatArray:
-    """Insert points along a polyline so that none are more than ``step_m`` apart."""
-    if len(points) < 2:
-        return points
-    gaps = np.hypot(*np.diff(points, axis=0).T)
-    pieces = np.maximum(np.ceil(gaps / step_m), 1).astype(np.int64)
-    start = np.repeat(points[:-1], pieces, axis=0)
-    delta = np.repeat(np.diff(points, axis=0) / pieces[:, None], pieces, axis=0)
-    within = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
-    dense = start + delta * within[:, None]
-    return np.vstack([dense, points[-1:]])
-
-
-def add_fitted_lines(
-    route: RouteBuilder, heading: float, fit: FittedLines, *, joined: bool = False
-) -> None:
-    """Append a cell's fitted lines and the driven turns between them to ``route``.
-
-    If the route's last point is the start point, a transit leg joins it to the first line.
-    With ``joined``, the route already ends at the first line's start (a routed move).
-    """
-    n = len(fit.u)
-    if n == 0:
-        return
-    offsets = fit.turns.offsets
-    # A turn's curve holds its two ends and the points between; a degenerate curve of one
-    # point (the next line starts where this one ends) has none between.
-    inner = np.maximum(np.diff(offsets) - 2, 0) if n > 1 else np.zeros(0, dtype=np.int64)
-    # Driving order: s0 e0 (turn 0) s1 e1 (turn 1) … as blocks of 2 + inner points.
-    sizes = np.full(n, 2, dtype=np.int64)
-    sizes[:-1] += inner
-    block = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    total = int(sizes.sum())
-    u = np.empty(total)
-    v = np.empty(total)
-    u[block], v[block] = fit.u, fit.v_start
-    u[block + 1], v[block + 1] = fit.u, fit.v_end
-    if n > 1:
-        keep = np.ones(len(fit.turns.xy), dtype=bool)
-        keep[offsets[:-1]] = False
-        keep[offsets[1:] - 1] = False
-        slots = np.ones(total, dtype=bool)
-        slots[block] = False
-        slots[block + 1] = False
-        u[slots], v[slots] = fit.turns.xy[keep, 0], fit.turns.xy[keep, 1]
-    x, y = from_sweep(u, v, heading)
-    roles: list[WaypointRole] = ["turn"] * total
-    lines: list[int | None] = [None] * total
-    line_of = fit.index.tolist()
-    starts = block.tolist()
-    for k in range(n):
-        roles[starts[k]] = "line_start"
-        roles[starts[k] + 1] = "line_end"
-        lines[starts[k]] = lines[starts[k] + 1] = line_of[k]
-    skip = 1 if joined else 0
-    if joined:
-        route.roles[-1] = "line_start"
-        route.lines[-1] = line_of[0]
-    base = len(route.x) - skip
-    if not joined and base and route.roles[-1] == "start":
-        route.segments.append(("transit", None, base - 1, base))
-    for k in range(n):
-        first = base + starts[k]
-        route.segments.append(("line", line_of[k], first, first + 1))
-        if k + 1 < n:
-            route.segments.append(("turn", None, first + 1, base + starts[k + 1]))
-    route.x.extend(x[skip:].tolist())
-    route.y.extend(y[skip:].tolist())
-    route.roles.extend(roles[skip:])
-    route.lines.extend(lines[skip:])
-
-
-def _first_ring_point(rings: list[LinearRing]) -> tuple[float, float]:
-    x0, y0 = rings[0].coords[0]
-    return float(x0), float(y0)
-
-
-def _ring_order(rings: list[LinearRing], here: tuple[float, float] | None) -> list[LinearRing]:
-    """Rings of one pass, nearest first from ``here`` (given order if None)."""
-    left = list(rings)
-    ordered = []
-    while left:
-        if here is None:
-            ring = left.pop(0)
-        else:
-            point = shapely.Point(here)
-            k = min(range(len(left)), key=lambda i: left[i].distance(point))
-            ring = left.pop(k)
-        ordered.append(ring)
-        entry = _ring_entry(ring, here)
-        here = entry
-    return ordered
-
-
-def _ring_entry(ring: LinearRing, from_xy: tuple[float, float] | None) -> tuple[float, float]:
-    if from_xy is None:
-        x0, y0 = ring.coords[0]
-        return float(x0), float(y0)
-    point = ring.interpolate(ring.project(shapely.Point(from_xy)))
-    return float(point.x), float(point.y)
-
-
-def _add_headland(
-    route: RouteBuilder,
-    ring: LinearRing,
-    pass_index: int,
-    router: FieldRouter,
-    *,
-    end_near: tuple[float, float] | None = None,
-) -> None:
-    """Drive ``ring`` once round, entering where it is nearest the tractor.
-
-    With ``end_near``, the round goes on along the ring to its point nearest ``end_near``.
-    """
-    here = route.here()
-    entry = _ring_entry(ring, here)
-    coords = np.asarray(ring.coords)[:-1]
-    distance_along = shapely.line_locate_point(ring, shapely.points(coords))
-    at = float(ring.project(shapely.Point(entry)))
-    ahead = np.asarray((distance_along - at) % ring.length, dtype=float)
-    order = np.argsort(ahead, kind="stable")
-    points: list[tuple[float, float]] = [
-        entry,
-        *[(float(c[0]), float(c[1])) for c in coords[order] if np.hypot(*(c - entry)) > 1e-9],
-        entry,
-    ]
-    if end_near is not None:
-        exit_at = float(ring.project(shapely.Point(end_near)))
-        further = (exit_at - at) % ring.length
-        exit_point = ring.interpolate(exit_at)
-        points += [
-            (float(coords[i, 0]), float(coords[i, 1]))
-            for i in order
-            if 1e-9 < ahead[i] < further - 1e-9
-        ]
-        if further > 1e-9:
-            points.append((float(exit_point.x), float(exit_point.y)))
-    loop = np.asarray(points)
-    if here is not None:
-        if route.roles[-1] == "start":
-            route.append("transit", None, np.asarray([here, entry]), "headland")
-        else:
-            route.append("turn", None, router.path(here, entry), "turn", last_role="headland")
-    route.append("headland", pass_index, loop, "headland")

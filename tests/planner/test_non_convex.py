@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely import Polygon
 
-from planner import plan_coverage
+from planner import parse_field_geojson, plan_coverage
 from planner.general import is_convex
 from planner.projection import field_frame
 from planner.types import CoveragePlan
@@ -198,3 +198,14 @@ def test_turn_round_a_notch_follows_the_boundary() -> None:
     ]
     assert len(under) == 1
     assert under[0][:, 1].max() <= tip[1] - 0.85 / 2 + 1e-3
+
+
+@pytest.mark.parametrize("vehicle", ["hand_tractor", "small_tractor", "paper_g1000", "rover"])
+def test_paper_field_with_two_headland_passes_at_3_m_plans_lines(
+    paper_geojson: dict, vehicle: str
+) -> None:
+    """Issue 9 fuzz case: two passes at 3 m leave a narrow inner area; lines still fit in it."""
+    spec = parse_field_geojson(paper_geojson)
+    plan = plan_coverage(spec.field_lonlat, interval_m=3.0, headland_passes=2, vehicle=vehicle)
+    assert plan.stats.line_count >= 1
+    assert_inside(plan)

@@ -1,0 +1,222 @@
+"""The winning heading driven: each cell's lines fitted for the vehicle, turns and moves.
+
+Line ends are pulled back until the vehicle's turns fit (:func:`planner.line_ends.fit_lines`)
+and every move between cells is the vehicle's own turn if it stays in, else routed inside
+the field (:mod:`planner.routing`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import numpy.typing as npt
+import shapely
+from shapely import MultiPolygon, Polygon
+
+from planner.cell_plans import Cell, CellPlan
+from planner.coverage import Chains, cell_area, convex_chains
+from planner.line_ends import FittedLines, fit_lines, snake_skip
+from planner.lines import from_sweep
+from planner.ordering import order_boustrophedon, order_snake
+from planner.route_builder import RouteBuilder, add_fitted_lines, densify
+from planner.routing import FieldRouter
+from planner.turns import STEP_M, TurnEnds, vehicle_turns
+from planner.types import Pattern, Vehicle
+
+FloatArray = npt.NDArray[np.float64]
+
+
+#: Fitted lines of a plan's cells by ``(cell, variant)``, before numbering.
+CellFits = dict[tuple[int, int], FittedLines]
+
+
+def fit_cell(
+    plan: CellPlan,
+    cell_index: int,
+    variant: int,
+    *,
+    vehicle: Vehicle,
+    skip: int,
+    room: Polygon | MultiPolygon | None,
+) -> FittedLines:
+    """Order one cell's lines by ``variant`` and pull their ends back until the turns fit.
+
+    ``room`` is the turning room already in the heading's sweep frame (or None: the cell).
+    """
+    cell = plan.cells[cell_index]
+    k = cell.lines
+    scan = plan.scan
+    u, lo, hi = scan.u[k], scan.v_lo[k], scan.v_hi[k]
+    n = len(u)
+    if skip > 1:
+        index, up = order_snake(n, variant, skip=skip)
+    else:
+        index, up = order_boustrophedon(n, variant)
+    return fit_lines(
+        u[index],
+        np.where(up, lo[index], hi[index]),
+        np.where(up, hi[index], lo[index]),
+        index,
+        machine=room_chains(cell, room),
+        vehicle=vehicle,
+    )
+
+
+def fit_cells(
+    plan: CellPlan,
+    *,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    interval_m: float,
+    turning_room: Polygon | MultiPolygon | None = None,
+    fits: CellFits | None = None,
+) -> list[FittedLines]:
+    """Fit every cell of ``plan`` in its driving order (see :func:`add_cells`).
+
+    ``fits`` holds cells fitted before, by ``(cell, variant)``; new fits are added to it.
+    """
+    fits = {} if fits is None else fits
+    skip = snake_skip(vehicle, interval_m) if pattern == "snake" else 1
+    room = None if turning_room is None else to_sweep_frame(turning_room, plan.heading_deg)
+    out = []
+    for cell_index, variant in plan.order:
+        key = (cell_index, variant)
+        if key not in fits:
+            fits[key] = fit_cell(plan, cell_index, variant, vehicle=vehicle, skip=skip, room=room)
+        out.append(fits[key])
+    return out
+
+
+def to_sweep_frame(geometry: Polygon | MultiPolygon, heading: float) -> Polygon | MultiPolygon:
+    """Rotate ``geometry`` from local ``x, y`` into the sweep frame ``u, v`` of ``heading``."""
+    theta = math.radians(heading)
+    cos_t, sin_t = math.cos(theta), math.sin(theta)
+
+    def to_uv(xy: FloatArray) -> FloatArray:
+        return np.stack(
+            [xy[:, 0] * cos_t - xy[:, 1] * sin_t, xy[:, 0] * sin_t + xy[:, 1] * cos_t], 1
+        )
+
+    rotated: Polygon | MultiPolygon = shapely.transform(geometry, to_uv)
+    return rotated
+
+
+def add_cells(
+    route: RouteBuilder,
+    plan: CellPlan,
+    router: FieldRouter,
+    *,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    interval_m: float,
+    turning_room: Polygon | MultiPolygon | None = None,
+    fits: CellFits | None = None,
+) -> list[FittedLines]:
+    """Append every cell's lines and turns, and the moves between cells, to ``route``.
+
+    Each cell's lines are ordered (back and forth, or snake), then their ends are pulled
+    back until the vehicle's turns fit the cell (:func:`planner.line_ends.fit_lines`), or,
+    with headland passes, the machine area beyond the cell (``turning_room``): the turns
+    swing out over the headland, as a tractor turns on the headland it then tills.
+    Returns the fitted lines of every cell, in driving order (sweep frame of the heading).
+    """
+    heading = plan.heading_deg
+    first_index = 0
+    fitted: list[FittedLines] = []
+    cell_fits = fit_cells(
+        plan,
+        vehicle=vehicle,
+        pattern=pattern,
+        interval_m=interval_m,
+        turning_room=turning_room,
+        fits=fits,
+    )
+    for fit in cell_fits:
+        if len(fit.u) == 0:
+            fitted.append(fit)  # one entry per cell, in driving order
+            continue
+        # Lines the turns could not reach are gone: number the rest left to right.
+        rank = np.argsort(np.argsort(fit.index, kind="stable"), kind="stable")
+        fit = replace(fit, index=(first_index + rank).astype(np.int64))
+        fitted.append(fit)
+        x0, y0 = from_sweep(fit.u[0], fit.v_start[0], heading)
+        target = (float(x0), float(y0))
+        here = route.here()
+        joined = False
+        if here is not None and route.roles[-1] != "start":
+            rising = bool(fit.v_end[0] >= fit.v_start[0])
+            move = move_between_cells(route, target, rising, heading, router, vehicle)
+            route.append("turn", None, move, "turn")
+            joined = True
+        add_fitted_lines(route, heading, fit, joined=joined)
+        first_index += len(fit.u)
+    return fitted
+
+
+def room_chains(cell: Cell, room: Polygon | MultiPolygon | None) -> Chains:
+    """Return the chains a cell's turns must stay within: the machine area over its span.
+
+    The piece of ``room`` (the turning room in the heading's sweep frame) over the cell's
+    ``u``-range that holds the cell, if it is one simple sweep-monotone polygon; else (or
+    without ``room``) the cell itself.
+    """
+    if room is None:
+        return cell.chains
+    c = cell.chains
+    big = 1e7
+    strip = shapely.box(c.u_min, -big, c.u_max, big)
+    middle = shapely.Point(
+        (c.u_min + c.u_max) / 2.0,
+        (
+            float(np.interp((c.u_min + c.u_max) / 2.0, c.lo_u, c.lo_v))
+            + float(np.interp((c.u_min + c.u_max) / 2.0, c.hi_u, c.hi_v))
+        )
+        / 2.0,
+    )
+    for piece in shapely.get_parts(shapely.intersection(room, strip)):
+        if not isinstance(piece, Polygon) or piece.interiors or not piece.covers(middle):
+            continue
+        ring = np.asarray(shapely.orient_polygons(piece).exterior.coords)[:-1]
+        chains = convex_chains(ring[:, 0], ring[:, 1])
+        # Sweep-monotone exactly when the area between the two chains is the piece's area.
+        if abs(cell_area(chains) - piece.area) <= 1e-6 * piece.area + 1e-6:
+            return chains
+    return cell.chains
+
+
+def move_between_cells(
+    route: RouteBuilder,
+    target: tuple[float, float],
+    up: bool,
+    heading: float,
+    router: FieldRouter,
+    vehicle: Vehicle,
+) -> FloatArray:
+    """Plan the move from the route's last line end to another cell's first line start.
+
+    The vehicle's own turn (a Dubins or pivot curve from pose to pose) if it stays inside the
+    machine area, else the shortest path inside it, with points at most 0.5 m apart (its
+    corners are turned on the spot or as tight as the vehicle can).
+    """
+    here = np.array([route.x[-1], route.y[-1]])
+    before = np.array([route.x[-2], route.y[-2]]) if len(route.x) > 1 else here
+    if route.roles[-1] == "line_end" and np.hypot(*(here - before)) > 1e-9:
+        yaw0 = math.atan2(here[1] - before[1], here[0] - before[0])
+        # Lines run along the heading: +v is (sin h, cos h) in local x, y.
+        theta = math.radians(heading)
+        along = math.atan2(math.cos(theta), math.sin(theta))
+        yaw1 = along if up else along + math.pi
+        ends = TurnEnds(
+            np.array([here[0]]),
+            np.array([here[1]]),
+            np.array([yaw0]),
+            np.array([target[0]]),
+            np.array([target[1]]),
+            np.array([yaw1]),
+        )
+        curve = vehicle_turns(ends, vehicle).curve(0)
+        if len(curve) >= 2 and router.inside(curve[:-1], curve[1:]).all():
+            return curve
+    return densify(router.path((float(here[0]), float(here[1])), target), STEP_M)

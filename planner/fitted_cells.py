@@ -1,0 +1,277 @@
+"""R5 on what the vehicle covers, for fields planned in cells (non-convex, holes, passes).
+
+The cheap plan of a heading (:func:`planner.cell_plans.plan_heading`) scores straight lines
+that end on the cells' chains, each an interval wide. The route then fits every cell's lines
+for the vehicle (:func:`planner.cell_route.fit_cells`): ends pulled back until its turns fit,
+lines it cannot reach dropped, and each line covers the implement's width. A heading's real
+coverage and length can therefore differ from its cheap figures by more than the rule's
+0.2 pp or the 1 % that separate headings, so the planned headings are compared on their
+fitted lines, as :mod:`planner.fitted_choice` does for convex fields.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from shapely import MultiPolygon, Polygon
+
+from planner.cell_plans import CellPlan
+from planner.cell_route import CellFits, fit_cells
+from planner.coverage import covered_area
+from planner.footprints import lines_covered
+from planner.line_ends import FittedLines, end_reach_m
+from planner.lines import from_sweep
+from planner.turns import TurnEnds, vehicle_turns
+from planner.types import Objective, Pattern, Vehicle
+
+#: Path lengths closer than this count as equal [m].
+_TIE_M = 1e-6
+
+
+@dataclass(frozen=True, slots=True)
+class FittedCells:
+    """One heading's cells fitted for the vehicle, with what they cover and their length.
+
+    Attributes
+    ----------
+    plan : CellPlan
+    fits : dict
+        Each cell's fitted lines by ``(cell, variant)``, for the route to reuse.
+    covered_m2 : float
+        Area of the field the implement covers on the fitted lines (R4) [m²].
+    length_m : float
+        Fitted lines, their turns, straight moves between cells and the start and finish
+        legs [m].
+    line_count : int
+        Lines driven.
+    cells_m2 : float
+        Area of the cells the fitted lines cover, each an interval wide: the measure of the
+        cheap plans (:func:`estimate`) [m²].
+    """
+
+    plan: CellPlan
+    fits: CellFits
+    covered_m2: float
+    length_m: float
+    line_count: int
+    cells_m2: float
+
+
+def fit_candidate(
+    plan: CellPlan,
+    *,
+    field_local: Polygon,
+    area: Polygon | MultiPolygon,
+    interval_m: float,
+    implement_width_m: float,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    turning_room: Polygon | MultiPolygon | None,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> FittedCells:
+    """Fit ``plan``'s cells for ``vehicle`` and measure coverage and length on them.
+
+    Parameters
+    ----------
+    plan : CellPlan
+        A heading's cells, in their driving order.
+    field_local, area : Polygon or MultiPolygon
+        The field and its machine area, local [m].
+    interval_m, implement_width_m : float
+        Line spacing and working width [m].
+    vehicle : Vehicle
+    pattern : {"boustrophedon", "snake"}
+    turning_room : Polygon or MultiPolygon or None
+        Where turns may swing out beyond the cells (with headland passes).
+    start_xy, finish_xy : tuple of float or None
+        Where the lines are reached from and left for, local [m].
+
+    Returns
+    -------
+    FittedCells
+    """
+    fits: CellFits = {}
+    fitted = fit_cells(
+        plan,
+        vehicle=vehicle,
+        pattern=pattern,
+        interval_m=interval_m,
+        turning_room=turning_room,
+        fits=fits,
+    )
+    covered = lines_covered(plan, fitted, field_local, area, plan.heading_deg, implement_width_m)
+    return FittedCells(
+        plan,
+        fits,
+        covered,
+        fitted_length_m(fitted, plan.heading_deg, start_xy, finish_xy),
+        sum(len(f.u) for f in fitted),
+        cells_covered_m2(plan, fitted, interval_m),
+    )
+
+
+def cells_covered_m2(plan: CellPlan, fitted: list[FittedLines], width_m: float) -> float:
+    """Area of ``plan``'s cells that fitted lines ``width_m`` wide cover [m²]."""
+    total = 0.0
+    for (cell_index, _), fit in zip(plan.order, fitted, strict=True):
+        if len(fit.u):
+            order = np.argsort(fit.u, kind="stable")
+            a, b = fit.v_start[order], fit.v_end[order]
+            chains = plan.cells[cell_index].chains
+            total += covered_area(chains, fit.u[order], np.minimum(a, b), np.maximum(a, b), width_m)
+    return total
+
+
+def choose_fitted(
+    candidates: list[FittedCells], objective: Objective, *, slack_m2: float
+) -> tuple[FittedCells, float]:
+    """Apply R5 to fitted headings: the objective's best within ``slack_m2`` of the best cover.
+
+    Returns
+    -------
+    chosen : FittedCells
+    given_up_m2 : float
+        Area the chosen heading covers less than the best-covering one [m²].
+
+    Examples
+    --------
+    >>> from planner.line_ends import FittedLines, end_reach_m
+    >>> a = FittedCells(None, {}, 100.0, 50.0, 3, 0.0)  # type: ignore[arg-type]
+    >>> b = FittedCells(None, {}, 99.9, 40.0, 4, 0.0)  # type: ignore[arg-type]
+    >>> c = FittedCells(None, {}, 90.0, 10.0, 1, 0.0)  # type: ignore[arg-type]
+    >>> chosen, given_up = choose_fitted([a, b, c], "shortest_path", slack_m2=0.2)
+    >>> chosen is b, round(given_up, 3)
+    (True, 0.1)
+    """
+    best_m2 = max(c.covered_m2 for c in candidates)
+    eligible = [c for c in candidates if c.covered_m2 >= best_m2 - slack_m2]
+
+    def key(c: FittedCells) -> tuple[float, float]:
+        lines = float(c.line_count) if objective == "fewest_lines" else 0.0
+        return lines, round(c.length_m / _TIE_M) * _TIE_M
+
+    chosen = min(eligible, key=key)  # min keeps the first of equals: the search's order
+    return chosen, max(best_m2 - chosen.covered_m2, 0.0)
+
+
+def fitted_length_m(
+    fitted: list[FittedLines],
+    heading: float,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> float:
+    """Length of fitted cells in driving order: lines, turns, straight moves, legs [m]."""
+    total = 0.0
+    here = None if start_xy is None else np.asarray(start_xy, dtype=float)
+    for fit in fitted:
+        if len(fit.u) == 0:
+            continue
+        total += float(np.abs(fit.v_end - fit.v_start).sum()) + float(fit.turns.length_m.sum())
+        entry = np.asarray(from_sweep(fit.u[0], fit.v_start[0], heading), dtype=float)
+        if here is not None:
+            total += float(np.hypot(*(entry - here)))
+        here = np.asarray(from_sweep(fit.u[-1], fit.v_end[-1], heading), dtype=float)
+    if finish_xy is not None and here is not None:
+        total += float(np.hypot(*(here - np.asarray(finish_xy, dtype=float))))
+    return total
+
+
+#: Headings within this share of the estimated best length are fitted as well as the choice.
+CLOSE_SHARE = 0.02
+#: ... at most this many of them (the budget: fitting is most of a plan's time).
+CLOSE_PLANS = 1
+
+
+@functools.lru_cache(maxsize=256)
+def turn_change_m(vehicle: Vehicle, spacing_m: float) -> tuple[float, float]:
+    """Estimate what fitting does to each turn between lines ``spacing_m`` apart.
+
+    Returns
+    -------
+    length_m : float
+        The driven turn minus the straight step it replaces and the two pulled-back ends [m].
+    reach_m : float
+        How far each of the turn's two line ends is pulled back [m].
+    """
+    zero = np.zeros(1)
+    ends = TurnEnds(zero, zero, zero + math.pi / 2.0, zero + spacing_m, zero, zero - math.pi / 2.0)
+    curves = vehicle_turns(ends, vehicle)
+    reach = end_reach_m(vehicle, spacing_m)
+    return float(curves.length_m.sum()) + 2.0 * reach - spacing_m, reach
+
+
+def estimate(plan: CellPlan, vehicle: Vehicle, spacing_m: float) -> tuple[float, float]:
+    """Estimate ``plan``'s fitted coverage [m²] and length [m] from its cheap figures.
+
+    Every turn (a line that is not a cell's last) is driven by the vehicle and pulls its
+    two line ends back: :func:`turn_change_m` per turn on the length, and the pulled-back
+    ends, one interval wide, off the coverage (:func:`planner.line_ends.fitting_loss_m2`'s
+    turn term; the cells already lie in the machine area, so its width term is not taken).
+    """
+    turns = _turn_count(plan)
+    length_m, reach_m = turn_change_m(vehicle, float(spacing_m))
+    covered = plan.covered_m2 - 2.0 * turns * reach_m * spacing_m
+    return covered, plan.length_m + turns * length_m
+
+
+def _turn_count(plan: CellPlan) -> int:
+    cells = sum(1 for c in plan.cells if c.lines.stop > c.lines.start)
+    return max(plan.line_count - cells, 0)
+
+
+def choose_cells(
+    cheap: list[CellPlan],
+    objective: Objective,
+    *,
+    slack_m2: float,
+    fit: Callable[[CellPlan], FittedCells],
+    vehicle: Vehicle,
+    interval_m: float,
+) -> tuple[FittedCells, float]:
+    """R5 on fitted lines, fitting as few headings as it can.
+
+    The cheap plans are ranked on their estimated fitted figures (:func:`estimate`); the
+    choice and every eligible heading within :data:`CLOSE_SHARE` of its estimated length
+    are fitted (at most :data:`CLOSE_PLANS` besides it). The estimate is then calibrated
+    on the choice (the area its turns really lost, per turn), and every heading that would
+    still cover more than the best fitted one by the rule's slack is fitted too. The
+    rule then picks among the fitted ones (:func:`choose_fitted`).
+
+    Returns
+    -------
+    chosen : FittedCells
+    given_up_m2 : float
+        Area it covers less than the best fitted heading [m²].
+    """
+    figures = [estimate(c, vehicle, interval_m) for c in cheap]
+    best_m2 = max(f[0] for f in figures)
+    eligible = [i for i, f in enumerate(figures) if f[0] >= best_m2 - slack_m2]
+
+    def key(i: int) -> tuple[float, float]:
+        lines = float(cheap[i].line_count) if objective == "fewest_lines" else 0.0
+        return lines, figures[i][1]
+
+    eligible.sort(key=key)
+    first = eligible[0]
+    close = [
+        i
+        for i in eligible
+        if key(i)[0] == key(first)[0] and figures[i][1] <= figures[first][1] * (1 + CLOSE_SHARE)
+    ][: 1 + CLOSE_PLANS]
+    fitted = {i: fit(cheap[i]) for i in close}
+    # The estimate calibrated on the choice: the area each of its turns really lost.
+    turns = [_turn_count(c) for c in cheap]
+    lost = max(cheap[first].covered_m2 - fitted[first].cells_m2, 0.0) / max(turns[first], 1)
+    best_fitted = max(f.cells_m2 for f in fitted.values())
+    rivals = [
+        i
+        for i in range(len(cheap))
+        if i not in fitted and cheap[i].covered_m2 - turns[i] * lost > best_fitted + slack_m2
+    ]
+    fitted.update({i: fit(cheap[i]) for i in rivals})
+    return choose_fitted([fitted[i] for i in sorted(fitted, key=key)], objective, slack_m2=slack_m2)
