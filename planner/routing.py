@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 import shapely
+import shapely.ops
 from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
 from shapely import Polygon
@@ -23,6 +24,9 @@ IntArray = npt.NDArray[np.int64]
 
 #: A move may graze the boundary by this much and still count as inside [m]; R1 allows 1 cm.
 GRAZE_M = 1e-3
+#: An end point this close outside the field (a headland ring built on the machine area's
+#: boundary, off by buffer rounding) is routed from its nearest point of the field [m].
+SNAP_M = 5e-3
 #: Corners whose visibility a query tests first (nearest the straight move by the ellipse).
 _FIRST_CORNERS = 32
 #: Sine below which a corner's neighbour counts as on a line through the corner.
@@ -75,6 +79,19 @@ class FieldRouter:
         segments = shapely.linestrings(np.stack([starts, ends], axis=1))
         return np.asarray(shapely.contains_properly(self._grown, segments))
 
+    def _snap(self, point: FloatArray) -> FloatArray:
+        """Return ``point``, or its nearest point of the field if it lies just outside."""
+        here = shapely.Point(point)
+        if self._grown.covers(here):
+            return point
+        distance = self.field.distance(here)
+        if distance > SNAP_M:
+            return point
+        # Onto the boundary, then a graze inwards: the search starts inside.
+        near = shapely.ops.nearest_points(self.field, here)[0]
+        towards = np.asarray(near.coords[0]) - point
+        return np.asarray(near.coords[0]) + towards / max(distance, 1e-12) * (GRAZE_M / 2.0)
+
     def path(self, start_xy: tuple[float, float], end_xy: tuple[float, float]) -> FloatArray:
         """Shortest path from ``start_xy`` to ``end_xy`` inside the field.
 
@@ -92,6 +109,13 @@ class FieldRouter:
         b = np.asarray(end_xy, dtype=float)
         if self.inside(a[None], b[None])[0]:
             return np.stack([a, b])
+        snapped_a, snapped_b = self._snap(a), self._snap(b)
+        if snapped_a is not a or snapped_b is not b:
+            inner = self.path(
+                (float(snapped_a[0]), float(snapped_a[1])),
+                (float(snapped_b[0]), float(snapped_b[1])),
+            )
+            return np.vstack([a[None], inner, b[None]])
         self._corners()
         n = len(self.nodes)
         if n == 0:
