@@ -5,7 +5,6 @@ This module only chains the stages; the geometry lives in the stage modules.
 
 from __future__ import annotations
 
-import itertools
 import time
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -34,8 +33,8 @@ from planner.types import (
     PlanStats,
     SegmentKind,
     Vehicle,
-    Waypoint,
     WaypointRole,
+    Waypoints,
 )
 from planner.vehicles import resolve_vehicle
 
@@ -356,11 +355,7 @@ def _assemble(
     lon = np.round(lon, LONLAT_DECIMALS)
     lat = np.round(lat, LONLAT_DECIMALS)
     lon_list, lat_list = lon.tolist(), lat.tolist()
-    waypoints = tuple(
-        itertools.starmap(
-            Waypoint, zip(range(len(x)), lon_list, lat_list, route.roles, route.lines, strict=True)
-        )
-    )
+    waypoints = Waypoints(lon_list, lat_list, route.roles, route.lines)
     step = np.hypot(np.diff(x), np.diff(y))
     distance = np.concatenate(([0.0], np.cumsum(step)))
     kinds = [kind for kind, _, _, _ in route.segments]
