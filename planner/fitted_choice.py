@@ -155,7 +155,7 @@ def choose_convex(
     # The search's estimate counts lines, not the slope of the boundary they end on, and on a
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
     # Edge by edge (planner.line_ends.edge_loss_m2), the choice may still keep the rule.
-    if first is not None:
+    if first is not None and first.covered_m2 > 0.0:
         given_up = _given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
         if given_up is not None:
             return FittedChoice(first, given_up)
@@ -204,11 +204,13 @@ def _given_up_by_edges(
     where that estimate does not hold (a field only a few turns across).
     """
     ring = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
+    headings = np.append(candidate_headings(ring), heading_deg)
+    u_ring, _ = to_sweep(ring[:, 0], ring[:, 1], headings[:, None])
+    # The field's least width (a convex field's is across one of its edges).
+    width = float(np.ptp(u_ring, axis=1).min())
     reach = end_reach_m(vehicle, float(interval_m)) + vehicle.width_m
-    width = float(min(np.ptp(ring[:, 0]), np.ptp(ring[:, 1])))
     if width < _EDGE_ESTIMATE_MIN_REACHES * reach:
         return None
-    headings = np.append(candidate_headings(ring), heading_deg)
     area = float(field_local.area)
     estimate = convex_coverage(ring, headings, interval_m)
     estimate -= edge_loss_m2(vehicle, interval_m, ring, headings) / area
@@ -228,7 +230,7 @@ def edge_headings(ring_xy: FloatArray) -> FloatArray:
     Examples
     --------
     >>> edge_headings(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0]])).tolist()
-    [90.0, 153.434948823, 0.0]
+    [63.434948823, 90.0, 0.0]
     """
     dx = np.roll(ring_xy[:, 0], -1) - ring_xy[:, 0]
     dy = np.roll(ring_xy[:, 1], -1) - ring_xy[:, 1]

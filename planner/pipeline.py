@@ -6,7 +6,7 @@ This module only chains the stages; the geometry lives in the stage modules.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -35,6 +35,7 @@ from planner.types import (
     Vehicle,
     WaypointRole,
     Waypoints,
+    vehicle_dict,
 )
 from planner.vehicles import resolve_vehicle
 
@@ -386,7 +387,7 @@ def _assemble(
         planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
         implement_width_m=implement_width_m,
         overlap_m=round(implement_width_m - interval_m, 6),
-        vehicle=asdict(vehicle),
+        vehicle=vehicle_dict(vehicle),
         coverage_given_up_pp=round(coverage_given_up_pp, 4),
     )
     return CoveragePlan(

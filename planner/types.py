@@ -9,7 +9,7 @@ from __future__ import annotations
 import itertools
 import operator
 from collections.abc import Iterator, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 from typing import Any, Literal, overload
 
 from shapely import Polygon
@@ -244,8 +244,34 @@ class PlanStats:
     vehicle: dict[str, Any] | None = None
 
     def as_dict(self) -> dict[str, Any]:
-        """Return the figures as a plain dict, in declaration order."""
-        return asdict(self)
+        """Return the figures as a plain dict, in declaration order (the vehicle's copied).
+
+        The same as :func:`dataclasses.asdict`, without its recursive deep copy of every
+        number (a plan preview calls this on every request).
+        """
+        figures = {name: getattr(self, name) for name in _PLAN_STATS_FIELDS}
+        if self.vehicle is not None:
+            figures["vehicle"] = dict(self.vehicle)
+        return figures
+
+
+_PLAN_STATS_FIELDS = tuple(f.name for f in fields(PlanStats))
+
+
+def vehicle_dict(vehicle: Vehicle) -> dict[str, Any]:
+    """Return the vehicle's figures as a plain dict, like :func:`dataclasses.asdict`.
+
+    Examples
+    --------
+    >>> from dataclasses import asdict
+    >>> vehicle = Vehicle("rover", 0.7, 1.0, 0.6, 0.0, True, 90.0)
+    >>> vehicle_dict(vehicle) == asdict(vehicle)
+    True
+    """
+    return {name: getattr(vehicle, name) for name in _VEHICLE_FIELDS}
+
+
+_VEHICLE_FIELDS = tuple(f.name for f in fields(Vehicle))
 
 
 @dataclass(frozen=True, slots=True)
