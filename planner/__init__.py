@@ -26,6 +26,7 @@ from planner.types import (
     PlanStats,
     Vehicle,
     Waypoint,
+    Waypoints,
 )
 from planner.vehicles import PRESETS, resolve_vehicle
 
@@ -48,6 +49,7 @@ __all__ = [
     "PlannerError",
     "Vehicle",
     "Waypoint",
+    "Waypoints",
     "field_frame",
     "local_frame",
     "parse_field_geojson",

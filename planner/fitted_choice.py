@@ -15,12 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import shapely
 from shapely import Polygon
 
-from planner.angles import COVERAGE_SLACK, HeadingChoice, LengthScorer
+from planner.angles import COVERAGE_SLACK, HeadingChoice, LengthScorer, candidate_headings
 from planner.coverage import convex_chains, covered_area
 from planner.errors import InvalidParameterError
-from planner.line_ends import FittedLines, convex_lines
+from planner.heading_coverage import convex_coverage
+from planner.line_ends import FittedLines, convex_lines, edge_loss_m2, end_reach_m
 from planner.lines import from_sweep, to_sweep
 from planner.types import Objective, Pattern, Vehicle
 
@@ -150,6 +152,13 @@ def choose_convex(
     estimated_best = choice.coverage_ratio + choice.coverage_given_up_pp / 100.0
     if first is not None and first.covered_m2 >= (estimated_best - COVERAGE_SLACK) * area:
         return FittedChoice(first, choice.coverage_given_up_pp)
+    # The search's estimate counts lines, not the slope of the boundary they end on, and on a
+    # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
+    # Edge by edge (planner.line_ends.edge_loss_m2), the choice may still keep the rule.
+    if first is not None and first.covered_m2 > 0.0:
+        given_up = _given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
+        if given_up is not None:
+            return FittedChoice(first, given_up)
     # The estimate was wrong here (a narrow field whose lines drop out when fitted): the
     # alternatives and every long edge's direction are planned in full.
     edges = edge_headings(ring)
@@ -180,6 +189,37 @@ def choose_convex(
     return FittedChoice(chosen, given_up_pp)
 
 
+#: The edge-by-edge estimate is trusted on fields at least this many turns' reach across
+#: (it ignores the overlap of the strips at corners, which a small field is made of).
+_EDGE_ESTIMATE_MIN_REACHES = 20.0
+
+
+def _given_up_by_edges(
+    field_local: Polygon, heading_deg: float, interval_m: float, vehicle: Vehicle
+) -> float | None:
+    """Coverage the heading gives up by the edge-by-edge estimate [pp], None if beyond R5.
+
+    Scored at every candidate heading (:func:`planner.angles.candidate_headings`): straight
+    lines' coverage in closed form less :func:`planner.line_ends.edge_loss_m2`. None also
+    where that estimate does not hold (a field only a few turns across).
+    """
+    ring = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
+    headings = np.append(candidate_headings(ring), heading_deg)
+    u_ring, _ = to_sweep(ring[:, 0], ring[:, 1], headings[:, None])
+    # The field's least width (a convex field's is across one of its edges).
+    width = float(np.ptp(u_ring, axis=1).min())
+    reach = end_reach_m(vehicle, float(interval_m)) + vehicle.width_m
+    if width < _EDGE_ESTIMATE_MIN_REACHES * reach:
+        return None
+    area = float(field_local.area)
+    estimate = convex_coverage(ring, headings, interval_m)
+    estimate -= edge_loss_m2(vehicle, interval_m, ring, headings) / area
+    given_up = float(estimate.max() - estimate[-1])
+    if given_up > COVERAGE_SLACK:
+        return None
+    return max(given_up, 0.0) * 100.0
+
+
 #: Edge directions planned in full when the search's estimate fails, longest edges first.
 MAX_EDGE_CHECKS = 16
 
@@ -190,7 +230,7 @@ def edge_headings(ring_xy: FloatArray) -> FloatArray:
     Examples
     --------
     >>> edge_headings(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0]])).tolist()
-    [90.0, 153.434948823, 0.0]
+    [63.434948823, 90.0, 0.0]
     """
     dx = np.roll(ring_xy[:, 0], -1) - ring_xy[:, 0]
     dy = np.roll(ring_xy[:, 1], -1) - ring_xy[:, 1]

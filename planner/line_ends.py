@@ -335,6 +335,80 @@ def fitting_loss_m2(vehicle: Vehicle, interval_m: float, line_counts: IntArray) 
     return np.asarray(per_m * float(interval_m))
 
 
+#: Angles between a boundary edge and the across-lines axis at which the pull-back is
+#: tabulated (:func:`_pull_back_table`) [rad]; the last, parallel to the lines, is the limit.
+_EDGE_ANGLES_RAD = np.linspace(0.0, math.pi / 2.0, 33)
+
+
+@functools.lru_cache(maxsize=256)
+def _pull_back_table(vehicle: Vehicle, spacing_m: float) -> FloatArray:
+    """Pull-back of line ends per metre of boundary, by the edge's angle (:func:`edge_loss_m2`).
+
+    A U-turn between lines ``spacing_m`` apart whose ends lie on a straight boundary of slope
+    ``s`` (along the lines, per metre across) must slide back until its highest point, measured
+    from that boundary, is at the ends: ``max(v - s u)``. The two senses of the turn (to the
+    left and to the right) are averaged, and the result is per metre of edge (``cos`` of the
+    angle times the pull-back). Cached: the same vehicle and interval come back.
+    """
+    slopes = np.tan(_EDGE_ANGLES_RAD[:-1])
+    k = len(slopes)
+    zero = np.zeros(k)
+    reach = np.zeros(k)
+    for sense in (1.0, -1.0):
+        ends = TurnEnds(
+            zero,
+            zero,
+            zero + math.pi / 2.0,
+            zero + spacing_m,
+            sense * slopes * spacing_m,
+            zero - math.pi / 2.0,
+        )
+        curves = vehicle_turns(ends, vehicle)
+        owner = np.repeat(np.arange(k), np.diff(curves.offsets))
+        above = curves.xy[:, 1] - sense * slopes[owner] * curves.xy[:, 0]
+        need = np.full(k, -np.inf)
+        np.maximum.at(need, owner, above)
+        reach += np.maximum(need, 0.0) / 2.0
+    per_edge_m = np.cos(_EDGE_ANGLES_RAD[:-1]) * reach
+    return np.append(per_edge_m, per_edge_m[-1])
+
+
+def edge_loss_m2(
+    vehicle: Vehicle, interval_m: float, ring_xy: FloatArray, headings_deg: FloatArray
+) -> FloatArray:
+    """Estimate the area fitting takes from straight lines, edge by edge of a convex ring [m²].
+
+    Unlike :func:`fitting_loss_m2` (which counts lines), every boundary edge loses a strip as
+    wide as the vehicle's half-width (the machine area), plus the pull-back of the line ends
+    on it, which grows with the edge's slope across the lines (:func:`_pull_back_table`). It
+    follows the fitted coverage's differences between headings on large fields; it ignores
+    the lines left out at the sides and the overlap of the strips at corners, so it overstates
+    the loss on fields a few turns wide.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    interval_m : float
+        Line spacing [m].
+    ring_xy : ndarray, shape (m, 2)
+        The convex field's exterior, local [m], not closed.
+    headings_deg : ndarray, shape (H,)
+
+    Returns
+    -------
+    ndarray, shape (H,)
+    """
+    dx = np.roll(ring_xy[:, 0], -1) - ring_xy[:, 0]
+    dy = np.roll(ring_xy[:, 1], -1) - ring_xy[:, 1]
+    length = np.hypot(dx, dy)
+    heading = np.radians(np.asarray(headings_deg, dtype=float))[:, None]
+    # The across-lines axis of a heading clockwise from north is (cos h, -sin h).
+    across = np.abs(dx * np.cos(heading) - dy * np.sin(heading)) / np.where(length > 0, length, 1)
+    angle = np.arccos(np.clip(across, 0.0, 1.0))
+    per_m = np.interp(angle, _EDGE_ANGLES_RAD, _pull_back_table(vehicle, float(interval_m)))
+    return np.asarray((length * (vehicle.width_m / 2.0 + per_m)).sum(axis=1))
+
+
 def convex_lines(
     field_local: Polygon,
     heading_deg: float,

@@ -5,9 +5,8 @@ This module only chains the stages; the geometry lives in the stage modules.
 
 from __future__ import annotations
 
-import itertools
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -34,8 +33,9 @@ from planner.types import (
     PlanStats,
     SegmentKind,
     Vehicle,
-    Waypoint,
     WaypointRole,
+    Waypoints,
+    vehicle_dict,
 )
 from planner.vehicles import resolve_vehicle
 
@@ -356,11 +356,7 @@ def _assemble(
     lon = np.round(lon, LONLAT_DECIMALS)
     lat = np.round(lat, LONLAT_DECIMALS)
     lon_list, lat_list = lon.tolist(), lat.tolist()
-    waypoints = tuple(
-        itertools.starmap(
-            Waypoint, zip(range(len(x)), lon_list, lat_list, route.roles, route.lines, strict=True)
-        )
-    )
+    waypoints = Waypoints(lon_list, lat_list, route.roles, route.lines)
     step = np.hypot(np.diff(x), np.diff(y))
     distance = np.concatenate(([0.0], np.cumsum(step)))
     kinds = [kind for kind, _, _, _ in route.segments]
@@ -391,7 +387,7 @@ def _assemble(
         planning_ms=round((time.perf_counter() - started) * 1000.0, 3),
         implement_width_m=implement_width_m,
         overlap_m=round(implement_width_m - interval_m, 6),
-        vehicle=asdict(vehicle),
+        vehicle=vehicle_dict(vehicle),
         coverage_given_up_pp=round(coverage_given_up_pp, 4),
     )
     return CoveragePlan(

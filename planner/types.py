@@ -6,8 +6,11 @@ Local metric geometry stays inside the stage modules.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-from typing import Any, Literal
+import itertools
+import operator
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, fields
+from typing import Any, Literal, overload
 
 from shapely import Polygon
 
@@ -104,6 +107,95 @@ class Waypoint:
     line: int | None
 
 
+class Waypoints(Sequence[Waypoint]):
+    """The route's waypoints in driving order, made on access from plain lists.
+
+    A plan of a large field with curved turns has some 50,000 waypoints; making every
+    :class:`Waypoint` up front took longer than planning. This sequence holds the columns
+    and makes each waypoint when it is read (by index, slice or iteration); it compares
+    equal to any sequence of the same waypoints, a tuple included.
+
+    Parameters
+    ----------
+    lon, lat : list of float
+        WGS84 degrees of each point.
+    roles : list of str
+    lines : list of int or None
+
+    Examples
+    --------
+    >>> route = Waypoints([115.3, 115.4], [-8.6, -8.7], ["line_start", "line_end"], [0, 0])
+    >>> len(route), route[-1]
+    (2, Waypoint(seq=1, lon=115.4, lat=-8.7, role='line_end', line=0))
+    >>> route == (Waypoint(0, 115.3, -8.6, "line_start", 0), route[1])
+    True
+    """
+
+    __slots__ = ("_lat", "_lines", "_lon", "_roles")
+
+    def __init__(
+        self,
+        lon: list[float],
+        lat: list[float],
+        roles: list[WaypointRole],
+        lines: list[int | None],
+    ) -> None:
+        if not len(lon) == len(lat) == len(roles) == len(lines):
+            raise ValueError("waypoint columns differ in length")
+        self._lon, self._lat, self._roles, self._lines = lon, lat, roles, lines
+
+    def __len__(self) -> int:
+        """Return the number of waypoints."""
+        return len(self._lon)
+
+    @overload
+    def __getitem__(self, index: int) -> Waypoint: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[Waypoint, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> Waypoint | tuple[Waypoint, ...]:
+        """Return one waypoint, or a tuple of them for a slice."""
+        if isinstance(index, slice):
+            return tuple(self[i] for i in range(*index.indices(len(self))))
+        i = operator.index(index)
+        if i < 0:
+            i += len(self)
+        if not 0 <= i < len(self):
+            raise IndexError("waypoint index out of range")
+        return Waypoint(i, self._lon[i], self._lat[i], self._roles[i], self._lines[i])
+
+    def __iter__(self) -> Iterator[Waypoint]:
+        """Make the waypoints in order."""
+        columns = (range(len(self)), self._lon, self._lat, self._roles, self._lines)
+        return itertools.starmap(Waypoint, zip(*columns, strict=True))
+
+    def __eq__(self, other: object) -> bool:
+        """Equal to any sequence of the same waypoints."""
+        if isinstance(other, Waypoints):
+            return (self._lon, self._lat, self._roles, self._lines) == (
+                other._lon,
+                other._lat,
+                other._roles,
+                other._lines,
+            )
+        if isinstance(other, Sequence) and not isinstance(other, str | bytes):
+            return len(other) == len(self) and all(a == b for a, b in zip(self, other, strict=True))
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        """Hash as the tuple of the waypoints would."""
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        """Show the waypoints as a tuple would."""
+        return f"Waypoints({tuple(self)!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle the columns (plans cross process boundaries in batch planning)."""
+        return (Waypoints, (self._lon, self._lat, self._roles, self._lines))
+
+
 @dataclass(frozen=True, slots=True)
 class PathSegment:
     """A piece of the route between waypoints, with what the tractor does on it.
@@ -152,8 +244,34 @@ class PlanStats:
     vehicle: dict[str, Any] | None = None
 
     def as_dict(self) -> dict[str, Any]:
-        """Return the figures as a plain dict, in declaration order."""
-        return asdict(self)
+        """Return the figures as a plain dict, in declaration order (the vehicle's copied).
+
+        The same as :func:`dataclasses.asdict`, without its recursive deep copy of every
+        number (a plan preview calls this on every request).
+        """
+        figures = {name: getattr(self, name) for name in _PLAN_STATS_FIELDS}
+        if self.vehicle is not None:
+            figures["vehicle"] = dict(self.vehicle)
+        return figures
+
+
+_PLAN_STATS_FIELDS = tuple(f.name for f in fields(PlanStats))
+
+
+def vehicle_dict(vehicle: Vehicle) -> dict[str, Any]:
+    """Return the vehicle's figures as a plain dict, like :func:`dataclasses.asdict`.
+
+    Examples
+    --------
+    >>> from dataclasses import asdict
+    >>> vehicle = Vehicle("rover", 0.7, 1.0, 0.6, 0.0, True, 90.0)
+    >>> vehicle_dict(vehicle) == asdict(vehicle)
+    True
+    """
+    return {name: getattr(vehicle, name) for name in _VEHICLE_FIELDS}
+
+
+_VEHICLE_FIELDS = tuple(f.name for f in fields(Vehicle))
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,8 +282,9 @@ class CoveragePlan:
     ----------
     field_lonlat : Polygon
         The field as given (WGS84), holes included.
-    waypoints : tuple of Waypoint
-        The route τ = [p_s, p_0, …, p_n, p_f] in driving order.
+    waypoints : sequence of Waypoint
+        The route τ = [p_s, p_0, …, p_n, p_f] in driving order (the planner gives
+        :class:`Waypoints`, made on access; a tuple does as well).
     segments : tuple of PathSegment
         The same route cut into transit legs, tillage lines, turns and headland passes.
     stats : PlanStats
@@ -181,7 +300,7 @@ class CoveragePlan:
     """
 
     field_lonlat: Polygon
-    waypoints: tuple[Waypoint, ...]
+    waypoints: Sequence[Waypoint]
     segments: tuple[PathSegment, ...]
     stats: PlanStats
     interval_m: float
