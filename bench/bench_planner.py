@@ -9,14 +9,16 @@ from __future__ import annotations
 
 import json
 import math
+import statistics
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import shapely
 from shapely import Polygon
 
-from bench.common import summary_ms, time_calls, verdict
+from bench.common import summary_ms, time_calls_cpu, verdict
 from planner import PlanStats, local_frame, parse_field_geojson, plan_coverage
 from planner.export import plan_to_geojson
 
@@ -69,6 +71,14 @@ def _plan_once(field: Polygon) -> tuple[float, float, PlanStats]:
     return time.perf_counter() - wall, time.process_time() - cpu, plan.stats
 
 
+def _wall_and_cpu(
+    function: Callable[[], object], *, repeat: int
+) -> tuple[tuple[float, float, float], float]:
+    """Median, p10 and p90 of the wall clock [ms], and the median CPU time [ms]."""
+    wall, cpu = time_calls_cpu(function, repeat=repeat)
+    return summary_ms(wall), statistics.median(cpu) * 1000.0
+
+
 def run() -> str:
     spec = parse_field_geojson(json.loads(PAPER.read_text()))
 
@@ -89,11 +99,11 @@ def run() -> str:
     )
     big = hundred_hectare_field()
     big_plan = plan_coverage(big, interval_m=1.0)
-    paper_ms = summary_ms(time_calls(paper, repeat=500))
-    big_ms = summary_ms(time_calls(lambda: plan_coverage(big, interval_m=1.0), repeat=60))
+    paper_ms = _wall_and_cpu(paper, repeat=500)
+    big_ms = _wall_and_cpu(lambda: plan_coverage(big, interval_m=1.0), repeat=60)
     small_plan = plan_coverage(big, interval_m=1.0, vehicle="small_tractor")
-    small_ms = summary_ms(
-        time_calls(lambda: plan_coverage(big, interval_m=1.0, vehicle="small_tractor"), repeat=40)
+    small_ms = _wall_and_cpu(
+        lambda: plan_coverage(big, interval_m=1.0, vehicle="small_tractor"), repeat=40
     )
     rows = [
         (
@@ -103,7 +113,7 @@ def run() -> str:
             f"{paper_plan.stats.line_count} lines",
         ),
         (
-            "100 ha convex field at 1 m, heading searched "
+            "100 ha convex field at 1 m, heading searched, `hand_tractor` "
             f"({big_plan.stats.area_m2 / 10_000:.1f} ha)",
             big_ms,
             25.0,
@@ -119,15 +129,17 @@ def run() -> str:
     lines = [
         "## Planner (product.md §11)",
         "",
-        "`python -m bench.run planner`; in process, median of repeated calls after warm-up.",
+        "`python -m bench.run planner`; in process, median of repeated calls after warm-up; "
+        "wall clock and CPU time (`time.process_time`) of the same calls. The verdict is on "
+        "the CPU median: on a shared machine the wall clock also counts other processes.",
         "",
-        "| case | result | median ms | p10–p90 ms | budget | verdict |",
-        "| --- | --- | ---: | ---: | ---: | --- |",
+        "| case | result | median ms | p10–p90 ms | CPU median ms | budget | verdict (CPU) |",
+        "| --- | --- | ---: | ---: | ---: | ---: | --- |",
     ]
-    for name, (median, p10, p90), budget, result in rows:
+    for name, ((median, p10, p90), cpu_median), budget, result in rows:
         lines.append(
-            f"| {name} | {result} | {median:.2f} | {p10:.2f}–{p90:.2f} | ≤ {budget:g} ms "
-            f"| {verdict(median, budget)} |"
+            f"| {name} | {result} | {median:.2f} | {p10:.2f}–{p90:.2f} | {cpu_median:.2f} "
+            f"| ≤ {budget:g} ms | {verdict(cpu_median, budget)} |"
         )
     lines += [
         "",

@@ -1,35 +1,44 @@
 """The ``spiral`` pattern: rounds parallel to the boundary, inward, then the core back and forth.
 
-Round ``i`` (from 0, outermost) runs ``(i + 1/2) · interval`` inside the boundary and around
-every hole, so its footprint fills the band from ``i · interval`` to ``(i + 1) · interval``, as
-the headland passes do (:mod:`planner.headlands`). Rounds go inward while the area inside them
-stays in one piece per piece of the field (a narrowing neck would otherwise scatter the rounds
-into many small loops); the core left inside the last round is then covered back and forth by
-the boustrophedon planner (:func:`planner.general.plan_general`). Every round is driven once
-around, entered at its point nearest the tractor, and every move between rounds and into the
-core is routed inside the field (:class:`planner.routing.FieldRouter`), so the route is one
-continuous path: each segment begins where the one before it ends.
+Round ``i`` (from 0, outermost) runs ``o_i = max(d/2, w/2) + i · d`` inside the boundary and
+around every hole (``d`` the interval, ``w`` the vehicle's width), so its footprint fills the
+band from ``o_i - d/2`` to ``o_i + d/2``, as the headland passes do (:mod:`planner.headlands`).
 
-The vehicle's body stays inside the field (R1): when half its width is more than half an
-interval, every round moves inward by the difference (the field is shrunk by it first), and
-the core is planned for the same vehicle (its lines pulled back from the core's edge, its
-turns ones the vehicle can drive). The rounds' corners are driven as the polygon's vertices:
-a vehicle with a turning radius rounds them off itself (the spiral fits no turn curves).
+Every round is a curve the vehicle drives (R1): the region it encloses is made regular for
+the turning radius ``R`` (:func:`regular_region`): nothing of it lies outside the field eroded
+by ``o_i``, so the body stays inside, and its boundary bends no tighter than ``R`` either way,
+so convex corners become arcs of radius ``R`` and the round swings wide of the field's inner
+(reflex) corners and of small holes. Rounds go inward while the area inside them stays in one
+piece per piece of the field (a narrowing neck would otherwise scatter the rounds into many
+small loops); the core left inside the last round is then covered back and forth by the
+boustrophedon planner (:func:`planner.general.plan_general`) for the same vehicle.
+
+Rounds are joined, and the last round to the core, by forward Dubins curves at the same radius
+(:func:`planner.turns.dubins_turn`): after a full round the vehicle drives on along it until a
+lane change to the next round (or the move to the core's first line) fits inside the field for
+its body, so the route is one continuous, drivable path: each segment begins where the one
+before it ends. Only where no such curve is found (a join that would have to wind round an
+obstacle) does the join fall back to the shortest move inside the field
+(:class:`planner.routing.FieldRouter`), with corners.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 import shapely
 from shapely import LinearRing, MultiPolygon, Polygon
+from shapely.geometry.base import BaseGeometry
 
 from planner import general
+from planner.errors import InvalidParameterError
 from planner.general import RouteBuilder
 from planner.line_ends import machine_area
 from planner.routing import FieldRouter
+from planner.turns import SAGITTA_M, STEP_M, TurnEnds, dubins_turn, turning_radius_m
 from planner.types import Objective, Vehicle
 from planner.vehicles import resolve_vehicle
 
@@ -39,6 +48,15 @@ FloatArray = npt.NDArray[np.float64]
 MAX_ROUNDS = 200
 #: Rounds and core parts smaller than this are dropped (slivers of the offsets) [m²].
 _SLIVER_M2 = 1e-6
+#: Rounds are planned for a radius this much larger than the vehicle's, so that the polygonal
+#: arcs of the buffers (and the rounding of exported coordinates) never bend tighter than it.
+RADIUS_SLACK = 1.03
+#: Buffers' segments per quarter circle: chords of a 3 m arc about 0.15 m long.
+_QUAD_SEGS = 32
+#: Room the body keeps from the boundary in the joins' check, inside R1's 1 cm [m].
+_BODY_MARGIN_M = 0.002
+#: Sliver tolerance of the regularisation [m].
+_EPS_M = 1e-3
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,7 +111,8 @@ def order_spiral(
     objective : {"shortest_path", "fewest_lines"}
         For the core's heading search.
     vehicle : Vehicle, optional
-        The machine (default the hand tractor): its half-width keeps the body inside.
+        The machine (default the hand tractor): its half-width keeps the body inside, its
+        turning radius bounds the rounds' curvature.
     implement_width_m : float, optional
         What one pass tills [m], for the coverage; default ``interval_m``.
 
@@ -103,11 +122,16 @@ def order_spiral(
 
     Examples
     --------
-    A 40 m × 24 m field at 4 m: three rounds, then the 16 m × 0 m core is nothing.
+    A 40 m × 24 m field at 4 m: three rounds, then the 16 m × 0 m core is nothing; the hand
+    tractor's pivots (0.35 m about the braked wheel) round the corners off a little. A small
+    tractor (3 m radius) drives two rounds and two core lines.
 
     >>> plan = order_spiral(shapely.box(0, 0, 40, 24), interval_m=4.0)
     >>> plan.round_count, plan.line_count, round(plan.coverage_ratio, 3)
-    (3, 0, 1.0)
+    (3, 0, 0.985)
+    >>> plan = order_spiral(shapely.box(0, 0, 40, 24), interval_m=4.0, vehicle="small_tractor")
+    >>> plan.round_count, plan.line_count, round(plan.coverage_ratio, 3)
+    (2, 2, 0.892)
     """
     field_local = shapely.orient_polygons(field_local)
     d = float(interval_m)
@@ -115,53 +139,64 @@ def order_spiral(
     implement = d if implement_width_m is None else float(implement_width_m)
     area = machine_area(field_local, machine)  # raises if the vehicle does not fit
     router = FieldRouter(area if isinstance(area, Polygon) else field_local)
+    radius = turning_radius_m(machine) * RADIUS_SLACK
+    half = machine.width_m / 2.0
+    # Where the body may be: the joins are checked against it.
+    allowed = field_local.buffer(-(half - _BODY_MARGIN_M), quad_segs=_QUAD_SEGS)
+    shapely.prepare(allowed)
     # Round 0 runs d/2 inside the boundary; a body wider than the interval needs more.
-    inset_m = max(0.0, machine.width_m / 2.0 - d / 2.0)
-    work: Polygon | MultiPolygon = field_local
-    if inset_m > 0.0:
-        inset = _parts(field_local.buffer(-inset_m, join_style="mitre"))
-        work = inset[0] if len(inset) == 1 else MultiPolygon(inset)
-    levels = _round_levels(work, d)
-    core_parts = _parts(work.buffer(-len(levels) * d, join_style="mitre"))
+    first_m = max(d / 2.0, half)
+    levels, regions = _round_levels(field_local, first_m, d, radius)
+    core_parts: list[Polygon] = []
+    if regions:
+        core_parts = _parts(regions[-1].buffer(-d / 2.0, quad_segs=_QUAD_SEGS))
+    elif not levels:
+        core_parts = _parts(field_local.buffer(-first_m + d / 2.0)) if first_m > d / 2 else []
     # A core piece narrower than the body holds no line it could drive: the rounds cover it.
-    core_parts = [p for p in core_parts if not p.buffer(-machine.width_m / 2.0).is_empty]
+    core_parts = [p for p in core_parts if not p.buffer(-half).is_empty]
 
     route = RouteBuilder()
     if start_xy is not None:
         route.append("transit", None, np.array([start_xy]), "start")
+    joiner = _Joiner(route, router, allowed, radius)
     round_index = 0
     for rings in levels:
-        for ring in _nearest_first(rings, route.here()):
-            _add_round(route, ring, round_index, router)
+        for ring in _nearest_first(rings, joiner.position()):
+            joiner.add_round(ring, round_index)
             round_index += 1
 
     heading = 0.0
     line_count = 0
     cells: list[Polygon] = []
+    kept: list[Polygon] = []
     core_covered = 0.0
     for part in core_parts:
-        here = route.here()
-        core = general.plan_general(
-            part,
-            interval_m=d,
-            start_xy=here,
-            finish_xy=finish_xy,
-            fixed_heading_deg=None,
-            objective=objective,
-            headland_passes=0,
-            vehicle=machine,
-            implement_width_m=implement,
-        )
-        _join(route, core.route, router)
+        try:
+            core = general.plan_general(
+                part,
+                interval_m=d,
+                start_xy=joiner.position(),
+                finish_xy=finish_xy,
+                fixed_heading_deg=None,
+                objective=objective,
+                headland_passes=0,
+                vehicle=machine,
+                implement_width_m=implement,
+            )
+        except InvalidParameterError:
+            continue  # a core too small for the vehicle's turns: the rounds cover round it
+        joiner.add_core(core.route)
         heading = core.heading_deg
         line_count += core.line_count
         cells.extend(core.cells_local)
+        kept.append(part)
         core_covered += core.lines_coverage_ratio * float(part.area)
+    joiner.finish()
 
     field_area = float(field_local.area)
     covered = core_covered
     if levels:
-        band = field_local.difference(shapely.union_all(core_parts)) if core_parts else field_local
+        band = field_local.difference(shapely.union_all(kept)) if kept else field_local
         footprints = shapely.union_all(
             [
                 ring.buffer(implement / 2.0, cap_style="flat", join_style="mitre")
@@ -180,6 +215,53 @@ def order_spiral(
     )
 
 
+def regular_region(
+    region: Polygon | MultiPolygon, radius_m: float
+) -> Polygon | MultiPolygon | shapely.Geometry:
+    """Return a part of ``region`` whose boundary bends no tighter than ``radius_m``.
+
+    The result ``S`` lies inside ``region`` and both ``S`` and its complement are unions of
+    discs of radius ``radius_m``, so a vehicle with that turning radius can drive its boundary
+    (convex corners become arcs of the radius; inner corners and holes too tight for it are
+    given a wide berth). With ``C`` the complement of ``region``, the discs that fit in ``C``
+    cover all of it but a residue (its sharp corners, its small pieces: the closing of
+    ``region`` less ``region``); the residue grown by the radius is cut from ``region``, so the
+    complement is a union of discs; the closing of the opening of what is left then keeps
+    within it and is regular both ways.
+
+    Parameters
+    ----------
+    region : Polygon or MultiPolygon
+    radius_m : float
+        Turning radius [m], > 0.
+
+    Returns
+    -------
+    Geometry
+        Possibly empty.
+
+    Examples
+    --------
+    A 20 m square at 3 m: the corners become quarter circles of 3 m.
+
+    >>> s = regular_region(shapely.box(0, 0, 20, 20), 3.0)
+    >>> round(s.area), round(400 - (4 - math.pi) * 9)
+    (392, 392)
+    """
+    r = float(radius_m)
+    q = _QUAD_SEGS
+    closed = region.buffer(r, quad_segs=q).buffer(-r, quad_segs=q)
+    residue = [
+        p
+        for p in shapely.get_parts(closed.difference(region.buffer(_EPS_M, quad_segs=q)))
+        if p.area > _SLIVER_M2
+    ]
+    kept: BaseGeometry = region
+    if residue:
+        kept = region.difference(shapely.union_all(residue).buffer(r + _EPS_M, quad_segs=q))
+    return kept.buffer(-r, quad_segs=q).buffer(2.0 * r, quad_segs=q).buffer(-r, quad_segs=q)
+
+
 def _parts(geometry: shapely.Geometry) -> list[Polygon]:
     parts = [
         shapely.orient_polygons(p)
@@ -190,23 +272,27 @@ def _parts(geometry: shapely.Geometry) -> list[Polygon]:
     return parts
 
 
-def _round_levels(field_local: Polygon | MultiPolygon, d: float) -> list[list[LinearRing]]:
-    """Return the rings of every round level, outermost first.
+def _round_levels(
+    field_local: Polygon, first_m: float, d: float, radius_m: float
+) -> tuple[list[list[LinearRing]], list[Polygon | MultiPolygon]]:
+    """Return the rings of every round level, outermost first, and the regions they enclose.
 
-    A level is kept while its centre line exists and the area inside its band is in no more
-    pieces than the field (a neck that splits it ends the rounds there).
+    A level is kept while its region exists and is in no more pieces than the field's first
+    offset (a neck that splits it ends the rounds there).
     """
     levels: list[list[LinearRing]] = []
-    pieces = len(_parts(field_local))
+    regions: list[Polygon | MultiPolygon] = []
+    pieces = len(_parts(field_local.buffer(-first_m, quad_segs=_QUAD_SEGS)))
     for i in range(MAX_ROUNDS):
-        centre = _parts(field_local.buffer(-(i + 0.5) * d, join_style="mitre"))
-        if not centre or len(centre) > pieces:
+        offset = field_local.buffer(-(first_m + i * d), quad_segs=_QUAD_SEGS)
+        if offset.is_empty:
             break
-        levels.append([ring for p in centre for ring in (p.exterior, *p.interiors)])
-        inner = _parts(field_local.buffer(-(i + 1) * d, join_style="mitre"))
-        if not inner or len(inner) > pieces:
+        parts = _parts(regular_region(offset, radius_m))
+        if not parts or len(parts) > pieces:
             break
-    return levels
+        levels.append([ring for p in parts for ring in (p.exterior, *p.interiors)])
+        regions.append(parts[0] if len(parts) == 1 else MultiPolygon(parts))
+    return levels, regions
 
 
 def _nearest_first(rings: list[LinearRing], here: tuple[float, float] | None) -> list[LinearRing]:
@@ -221,70 +307,196 @@ def _nearest_first(rings: list[LinearRing], here: tuple[float, float] | None) ->
             k = min(range(len(left)), key=lambda i: (left[i].distance(point), i))
         ring = left.pop(k)
         ordered.append(ring)
-        here = _entry(ring, here)
+        if here is not None:
+            nearest = ring.interpolate(ring.project(shapely.Point(here)))
+            here = (float(nearest.x), float(nearest.y))
     return ordered
 
 
-def _entry(ring: LinearRing, here: tuple[float, float] | None) -> tuple[float, float]:
-    if here is None:
-        x0, y0 = ring.coords[0]
-        return float(x0), float(y0)
-    point = ring.interpolate(ring.project(shapely.Point(here)))
-    return float(point.x), float(point.y)
+def resample_ring(ring: LinearRing, step_m: float) -> FloatArray:
+    """Points evenly along a closed ring, at most ``step_m`` apart, the first not repeated.
+
+    Even steps keep the three-point curvature of the buffers' polygonal arcs at their radius.
+    """
+    length = float(ring.length)
+    n = max(3, math.ceil(length / step_m - 1e-9))
+    if length <= 0.0:
+        return np.asarray(ring.coords)[:1]
+    along = np.arange(n) * (length / n)
+    return np.asarray(shapely.get_coordinates(shapely.line_interpolate_point(ring, along)))
 
 
-def _add_round(route: RouteBuilder, ring: LinearRing, index: int, router: FieldRouter) -> None:
-    """Drive ``ring`` once round from its point nearest the tractor, joined by a routed move."""
-    here = route.here()
-    entry = _entry(ring, here)
-    coords = np.asarray(ring.coords)[:-1]
-    along = shapely.line_locate_point(ring, shapely.points(coords))
-    at = float(ring.project(shapely.Point(entry)))
-    order = np.argsort((along - at) % ring.length, kind="stable")
-    points = [entry]
-    points += [(float(c[0]), float(c[1])) for c in coords[order] if np.hypot(*(c - entry)) > 1e-9]
-    points.append(entry)
-    if here is not None:
-        if route.roles[-1] == "start":
-            route.append("transit", None, np.asarray([here, entry]), "headland")
+class _Joiner:
+    """Builds the route: rounds driven once round, and drivable joins between them."""
+
+    def __init__(
+        self, route: RouteBuilder, router: FieldRouter, allowed: shapely.Geometry, radius: float
+    ) -> None:
+        self.route = route
+        self.router = router
+        self.allowed = allowed
+        self.radius = radius
+        # Steps short enough that a chord of the tightest arc stays within 1 cm of it.
+        self.step = min(STEP_M, 2.0 * math.sqrt(2.0 * radius * SAGITTA_M))
+        #: The round being driven, its points from the entry on, and its round index.
+        self.ring: FloatArray | None = None
+        self.ring_index: int | None = None
+
+    def position(self) -> tuple[float, float] | None:
+        """Where the vehicle is once the current round is driven (its entry point)."""
+        if self.ring is not None:
+            return float(self.ring[0, 0]), float(self.ring[0, 1])
+        return self.route.here()
+
+    def add_round(self, ring: LinearRing, index: int) -> None:
+        """Drive ``ring`` once round (the exterior anticlockwise, holes clockwise)."""
+        points = resample_ring(ring, self.step)
+        if self.ring is None:
+            here = self.route.here()
+            entry = 0 if here is None else _nearest(points, np.asarray(here))
+            ordered = np.roll(points, -entry, axis=0)
+            if here is None:
+                self._start_at(ordered[0])
+            else:
+                self.route.append("transit", None, np.asarray([here, ordered[0]]), "headland")
+            self.ring, self.ring_index = ordered, index
+            return
+        curve, extra, arrive = self._join_to_ring(points)
+        self._leave_round(extra, curve)
+        self.ring, self.ring_index = np.roll(points, -arrive, axis=0), index
+
+    def add_core(self, core: RouteBuilder) -> None:
+        """Append the core's route, reached by a drivable join from the round driven last."""
+        if not core.x:
+            return
+        start = 1 if core.roles and core.roles[0] == "start" else 0  # the core's own start leg
+        first = np.array([core.x[start], core.y[start]])
+        if self.ring is not None:
+            nxt = np.array([core.x[start + 1], core.y[start + 1]])
+            yaw = math.atan2(*(nxt - first)[::-1])
+            curve, extra = self._join_to_pose(first, yaw)
+            self._leave_round(extra, curve, last_role=core.roles[start])
+            self.ring = None
+            self.route.lines[-1] = core.lines[start]
+        elif self.route.x and self.route.roles[-1] == "start":
+            self.route.append("transit", None, np.asarray([self.route.here(), first]), "turn")
+            self.route.roles[-1] = core.roles[start]
+            self.route.lines[-1] = core.lines[start]
+        elif self.route.x:
+            here = (self.route.x[-1], self.route.y[-1])
+            self.route.append("turn", None, self.router.path(here, (first[0], first[1])), "turn")
+            self.route.roles[-1] = core.roles[start]
+            self.route.lines[-1] = core.lines[start]
         else:
-            route.append("turn", None, router.path(here, entry), "turn", last_role="headland")
-    elif not route.x:
-        route.x.append(entry[0])
-        route.y.append(entry[1])
-        route.roles.append("headland")
-        route.lines.append(None)
-    route.append("round", index, np.asarray(points), "headland")
+            self._start_at(first)
+            self.route.roles[-1] = core.roles[start]
+            self.route.lines[-1] = core.lines[start]
+        offset = len(self.route.x) - 1
+        route = self.route
+        route.x.extend(core.x[start + 1 :])
+        route.y.extend(core.y[start + 1 :])
+        route.roles.extend(core.roles[start + 1 :])
+        route.lines.extend(core.lines[start + 1 :])
+        for kind, index, a, b in core.segments:
+            if a < start:
+                continue  # the core's start leg: replaced by the move above
+            route.segments.append((kind, index, a - start + offset, b - start + offset))
+
+    def finish(self) -> None:
+        """Drive the last round once round if nothing follows it."""
+        if self.ring is not None:
+            self._leave_round(0, None)
+            self.ring = None
+
+    # -- internals --------------------------------------------------------------------------
+
+    def _start_at(self, xy: FloatArray) -> None:
+        self.route.x.append(float(xy[0]))
+        self.route.y.append(float(xy[1]))
+        self.route.roles.append("headland")
+        self.route.lines.append(None)
+
+    def _leave_round(
+        self, extra: int, curve: FloatArray | None, *, last_role: str | None = None
+    ) -> None:
+        """Append the current round (once round plus ``extra`` points) and the join after it."""
+        assert self.ring is not None
+        n = len(self.ring)
+        along = self.ring[np.arange(n + extra + 1) % n]
+        self.route.append("round", self.ring_index, along, "headland")
+        if curve is not None and len(curve) > 1:
+            self.route.append("turn", None, curve, "turn", last_role=last_role)  # type: ignore[arg-type]
+
+    def _departures(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Candidate points to leave the current round: after the loop, on along it."""
+        assert self.ring is not None
+        n = len(self.ring)
+        extra = np.arange(n)
+        xy = self.ring[extra % n]
+        before = self.ring[(extra - 1) % n]
+        yaw = np.arctan2(xy[:, 1] - before[:, 1], xy[:, 0] - before[:, 0])
+        return xy, yaw, extra.astype(float)
+
+    def _best(
+        self,
+        dep_xy: FloatArray,
+        dep_yaw: FloatArray,
+        extra: FloatArray,
+        to_xy: FloatArray,
+        to_yaw: FloatArray,
+    ) -> int | None:
+        """Index of the cheapest candidate join that keeps the body inside, and its curve."""
+        ends = TurnEnds(dep_xy[:, 0], dep_xy[:, 1], dep_yaw, to_xy[:, 0], to_xy[:, 1], to_yaw)
+        curves = dubins_turn(ends, radius_m=self.radius)
+        inside = shapely.contains_xy(self.allowed, curves.xy[:, 0], curves.xy[:, 1])
+        owner = np.repeat(np.arange(len(curves)), np.diff(curves.offsets))
+        bad = np.zeros(len(curves), dtype=bool)
+        np.logical_or.at(bad, owner, ~inside)
+        cost = np.where(bad, np.inf, curves.length_m + extra * self.step)
+        if not np.isfinite(cost).any():
+            return None
+        k = int(np.argmin(cost))
+        self._curve = curves.curve(k).copy()
+        return k
+
+    def _join_to_ring(self, points: FloatArray) -> tuple[FloatArray, int, int]:
+        """Join the current round to the ring ``points``: curve, extra points, arrival index."""
+        dep_xy, dep_yaw, extra = self._departures()
+        ahead = np.array([0.0, 1.0, 2.0, 4.0]) * self.radius + 2.0 * self.step
+        nxt = np.roll(points, -1, axis=0)
+        ring_yaw = np.arctan2(nxt[:, 1] - points[:, 1], nxt[:, 0] - points[:, 0])
+        tree = shapely.STRtree(np.asarray(shapely.points(points)))
+        cand_dep, cand_to = [], []
+        for f in ahead:
+            probe = dep_xy + f * np.stack([np.cos(dep_yaw), np.sin(dep_yaw)], axis=1)
+            nearest = tree.query_nearest(shapely.points(probe), all_matches=False)[1]
+            cand_dep.append(np.arange(len(dep_xy)))
+            cand_to.append(nearest)
+        i = np.concatenate(cand_dep)
+        j = np.concatenate(cand_to)
+        for limit in (min(len(dep_xy), 4 * int(self.radius / self.step) + 40), len(dep_xy)):
+            use = i < limit
+            k = self._best(
+                dep_xy[i[use]], dep_yaw[i[use]], extra[i[use]], points[j[use]], ring_yaw[j[use]]
+            )
+            if k is not None:
+                return self._curve, int(i[use][k]), int(j[use][k])
+        # No drivable join found: the shortest move inside the field, with corners.
+        target = _nearest(points, self.ring[0]) if self.ring is not None else 0
+        assert self.ring is not None
+        path = self.router.path(tuple(self.ring[0]), tuple(points[target]))
+        return path, 0, target
+
+    def _join_to_pose(self, xy: FloatArray, yaw: float) -> tuple[FloatArray, int]:
+        """Join the current round to the pose ``(xy, yaw)``: curve and extra points."""
+        dep_xy, dep_yaw, extra = self._departures()
+        n = len(dep_xy)
+        k = self._best(dep_xy, dep_yaw, extra, np.repeat(xy[None, :], n, axis=0), np.full(n, yaw))
+        if k is not None:
+            return self._curve, k
+        assert self.ring is not None
+        return self.router.path(tuple(self.ring[0]), tuple(xy)), 0
 
 
-def _join(route: RouteBuilder, core: RouteBuilder, router: FieldRouter) -> None:
-    """Append the core's route, reached by a routed move from the route's last point."""
-    if not core.x:
-        return
-    start = 1 if core.roles and core.roles[0] == "start" else 0  # the core's own start leg
-    first = (core.x[start], core.y[start])
-    offset = len(route.x)
-    here = route.here()
-    if here is not None and route.roles[-1] != "start":
-        route.append("turn", None, router.path(here, first), "turn")
-        route.roles[-1] = core.roles[start]
-        route.lines[-1] = core.lines[start]
-        offset = len(route.x) - 1
-    elif here is not None:
-        route.append("transit", None, np.asarray([here, first]), core.roles[start])
-        route.lines[-1] = core.lines[start]
-        offset = len(route.x) - 1
-    else:
-        route.x.append(first[0])
-        route.y.append(first[1])
-        route.roles.append(core.roles[start])
-        route.lines.append(core.lines[start])
-        offset = 0
-    route.x.extend(core.x[start + 1 :])
-    route.y.extend(core.y[start + 1 :])
-    route.roles.extend(core.roles[start + 1 :])
-    route.lines.extend(core.lines[start + 1 :])
-    for kind, index, a, b in core.segments:
-        if a < start:
-            continue  # the core's start leg: replaced by the move above
-        route.segments.append((kind, index, a - start + offset, b - start + offset))
+def _nearest(points: FloatArray, xy: FloatArray) -> int:
+    return int(np.argmin(np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1])))

@@ -21,6 +21,7 @@ const STYLES = {
   line: { color: "#ffe14d", weight: 4, opacity: 0.95 },
   turn: { color: "#4dd8f0", weight: 3, opacity: 0.95 },
   headland: { color: "#ff9f43", weight: 4, opacity: 0.95 },
+  round: { color: "#ff9f43", weight: 4, opacity: 0.95 }, // a spiral's rounds: passes round the field
   transit: { color: "#ffffff", weight: 3, opacity: 0.95, dashArray: "6 6" },
 };
 
@@ -152,7 +153,7 @@ const MIN_LABEL_SPACING_PX = 26;
  *
  * @param {L.Map} map The map.
  * @param {object} geojson The plan's FeatureCollection (kinds: cell, line, turn, headland,
- *     transit, path, waypoint; the field is drawn by the page's own editable layer).
+ *     round, transit, path, waypoint; the field is drawn by the page's own editable layer).
  * @returns {{bounds: L.LatLngBounds|null, remove: function(): void}}
  */
 export function drawPlan(map, geojson) {
@@ -166,7 +167,7 @@ export function drawPlan(map, geojson) {
     group.addLayer(L.polyline(route.map(([lon, lat]) => [lat, lon]), { ...PATH_CASING, interactive: false, pmIgnore: true }));
   }
   group.addLayer(
-    L.geoJSON(shown(["headland", "transit", "turn", "line"]), {
+    L.geoJSON(shown(["headland", "round", "transit", "turn", "line"]), {
       pmIgnore: true,
       interactive: false,
       style: (feature) => STYLES[kindOf(feature)],

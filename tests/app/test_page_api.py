@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gzip
 import json
+from pathlib import Path
 from typing import Any
 
 from fastapi.testclient import TestClient
@@ -121,5 +122,11 @@ def test_manifest_and_service_worker(client: TestClient) -> None:
     shell = json.loads(text.split("const SHELL = ", 1)[1].split(".map(", 1)[0])
     for path in ["", "static/js/map.js", "static/js/i18n.js", "i18n/id.json"]:
         assert path in shell
+    # Every module the page imports is cached too (map.js is split by concern).
+    js = Path(__file__).parents[2] / "static" / "js"
+    modules = sorted(p.name for p in js.glob("*.js") if p.name != "sw.js")  # sw.js: at /sw.js
+    assert {"pagestate.js", "fieldedit.js", "draft.js", "planview.js"} <= set(modules)
+    for name in modules:
+        assert f"static/js/{name}" in shell, name
     for path in shell:
         assert client.get("/" + path).status_code == 200, path

@@ -1,0 +1,152 @@
+"""The spiral for a real machine: every round and every join is a curve the vehicle drives,
+with its body inside the field (issue 9, R1), on convex and non-convex fields with round holes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from shapely import LineString, Polygon
+
+from planner import parse_field_geojson, plan_coverage
+from planner.projection import field_frame
+from planner.types import CoveragePlan
+from planner.vehicles import PRESETS
+from tests.conftest import field_from_local
+from tests.planner.plan_checks import TOLERANCE_M, plan_vehicle, turn_curvatures
+
+SETTINGS = settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def driven(plan: CoveragePlan) -> list[tuple[str, np.ndarray, str | None]]:
+    """Every segment in local metres, with its kind and the kind of the segment before it."""
+    frame = field_frame(plan.field_lonlat)
+    out = []
+    before: str | None = None
+    for segment in plan.segments:
+        x, y = frame.to_local_xy(*np.asarray(segment.lonlat).T)
+        out.append((segment.kind, np.stack([x, y], axis=1), before))
+        before = segment.kind
+    return out
+
+
+def assert_spiral_drivable(plan: CoveragePlan) -> None:
+    """Curvature ≤ 1/radius and points ≤ 0.5 m apart along every round and every join out of
+    a round; the body (path buffered by half the width) inside along rounds, turns and lines;
+    one continuous path."""
+    vehicle = plan_vehicle(plan)
+    radius = vehicle.min_turn_radius_m or vehicle.track_m / 2.0
+    field_local = field_frame(plan.field_lonlat).to_local(plan.field_lonlat)
+    grown = field_local.buffer(TOLERANCE_M)
+    half = vehicle.width_m / 2.0
+    segments = driven(plan)
+    assert any(kind == "round" for kind, _, _ in segments)
+    for kind, xy, before in segments:
+        if kind in ("round", "turn", "line"):
+            outside = LineString(xy).buffer(half).difference(grown).area
+            assert outside < 1e-6, f"the body leaves the field along a {kind} by {outside} m²"
+        if kind == "round" or (kind == "turn" and before == "round"):
+            step = np.hypot(*np.diff(xy, axis=0).T)
+            assert (step <= 0.5 + 1e-3).all(), f"{kind} points {step.max():.3f} m apart"
+            kappa = turn_curvatures(xy)
+            # Waypoints are rounded to 1e-9° (0.1 mm): allow for that on short steps.
+            assert (kappa <= 1.0 / radius * 1.02 + 0.02).all(), f"{kind}: {kappa.max():.3f}"
+    for a, b in zip(plan.segments[:-1], plan.segments[1:], strict=True):
+        assert a.lonlat[-1] == b.lonlat[0], "the path is not continuous"
+    # Joins into the next round keep the curvature across the seam, too.
+    for (k0, xy0, _), (k1, xy1, _) in zip(segments[:-1], segments[1:], strict=True):
+        if {k0, k1} == {"round", "turn"}:
+            seam = np.vstack([xy0[-3:], xy1[1:3]])
+            assert (turn_curvatures(seam) <= 1.0 / radius * 1.02 + 0.02).all()
+
+
+@st.composite
+def fields_with_round_holes(draw: st.DrawFn, *, convex: bool) -> Polygon:
+    """A convex hull or a star-shaped field of 60–160 m with 0–2 round holes (ponds, trees)."""
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    size = draw(st.floats(60.0, 160.0))
+    n = draw(st.integers(3, 12))
+    if convex:
+        outer = shapely.MultiPoint(rng.uniform(-0.5, 0.5, (max(n, 5), 2)) * size).convex_hull
+    else:
+        angles = np.sort(rng.uniform(0.0, 2.0 * math.pi, max(n, 5)))
+        radii = size / 2 * rng.uniform(0.55, 1.0, len(angles))
+        outer = Polygon(np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1))
+    if not isinstance(outer, Polygon) or not outer.is_valid or outer.area < 0.2 * size**2:
+        outer = shapely.box(-size / 2, -size / 3, size / 2, size / 3)
+    holes: list[Polygon] = []
+    for _ in range(draw(st.integers(0, 2))):
+        r = draw(st.floats(0.5, 0.08 * size))
+        centre = shapely.Point(rng.uniform(-0.25, 0.25, 2) * size)
+        hole = centre.buffer(r, quad_segs=8)
+        if outer.buffer(-4.0).contains(hole) and all(hole.distance(h) > 4.0 for h in holes):
+            holes.append(hole)
+    field = Polygon(outer.exterior, [h.exterior for h in holes])
+    return shapely.orient_polygons(field)  # type: ignore[no-any-return]
+
+
+@SETTINGS
+@given(
+    field=fields_with_round_holes(convex=True),
+    preset=st.sampled_from(sorted(PRESETS)),
+    interval=st.sampled_from([1.5, 2.5, 4.0]),
+)
+def test_convex_fields_with_round_holes_are_drivable_spirals(
+    field: Polygon, preset: str, interval: float
+) -> None:
+    plan = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=preset
+    )
+    assert_spiral_drivable(plan)
+
+
+@SETTINGS
+@given(
+    field=fields_with_round_holes(convex=False),
+    preset=st.sampled_from(sorted(PRESETS)),
+    interval=st.sampled_from([1.5, 2.5, 4.0]),
+)
+def test_non_convex_fields_with_round_holes_are_drivable_spirals(
+    field: Polygon, preset: str, interval: float
+) -> None:
+    plan = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=preset
+    )
+    assert_spiral_drivable(plan)
+
+
+def test_paper_field_at_1_m_is_one_drivable_spiral_covering_97_percent(paper_geojson: dict) -> None:
+    """Done-when of issue 9 (spiral), with the hand tractor; the small tractor's 3 m radius
+    rounds every corner of this 16 m × 20 m field off and covers far less."""
+    spec = parse_field_geojson(paper_geojson)
+    for preset, least in (("hand_tractor", 0.97), ("small_tractor", 0.70)):
+        plan = plan_coverage(
+            spec.field_lonlat,
+            interval_m=1.0,
+            start_lonlat=spec.start_lonlat,
+            finish_lonlat=spec.finish_lonlat,
+            pattern="spiral",
+            vehicle=preset,
+        )
+        assert_spiral_drivable(plan)
+        assert plan.stats.coverage_ratio >= least, preset
+
+
+def test_a_small_tractor_swings_wide_of_a_tree() -> None:
+    """A 1 m tree in a 3 m-radius vehicle's way: the round round it is no tighter than 3 m."""
+    tree = shapely.Point(40, 30).buffer(1.0)
+    field = Polygon(shapely.box(0, 0, 80, 60).exterior, [tree.exterior])
+    plan = plan_coverage(
+        field_from_local(field), interval_m=2.0, pattern="spiral", vehicle="small_tractor"
+    )
+    assert_spiral_drivable(plan)
+    frame = field_frame(plan.field_lonlat)
+    local_tree = frame.to_local(plan.field_lonlat).interiors[0]
+    centre = Polygon(local_tree).centroid
+    rounds = [LineString(xy) for kind, xy, _ in driven(plan) if kind == "round"]
+    around = [r for r in rounds if Polygon(r.coords).contains(centre) and r.length < 100]
+    assert around, "no round goes round the tree"
+    assert min(r.distance(centre) for r in around) >= 3.0 - 0.05
