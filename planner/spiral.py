@@ -55,6 +55,10 @@ RADIUS_SLACK = 1.03
 _QUAD_SEGS = 32
 #: Room the body keeps from the boundary in the joins' check, inside R1's 1 cm [m].
 _BODY_MARGIN_M = 0.002
+#: Candidate joins checked exactly (chords and all), cheapest first.
+_EXACT_CHECKS = 32
+#: Shortest step between the points of a round [m].
+_MIN_STEP_M = 0.15
 #: Sliver tolerance of the regularisation [m].
 _EPS_M = 1e-3
 
@@ -150,8 +154,10 @@ def order_spiral(
     core_parts: list[Polygon] = []
     if regions:
         core_parts = _parts(regions[-1].buffer(-d / 2.0, quad_segs=_QUAD_SEGS))
-    elif not levels:
-        core_parts = _parts(field_local.buffer(-first_m + d / 2.0)) if first_m > d / 2 else []
+    elif first_m > d / 2.0:  # no round fits: the core is all the body may reach
+        core_parts = _parts(field_local.buffer(-(first_m - d / 2.0), quad_segs=_QUAD_SEGS))
+    else:
+        core_parts = _parts(field_local)
     # A core piece narrower than the body holds no line it could drive: the rounds cover it.
     core_parts = [p for p in core_parts if not p.buffer(-half).is_empty]
 
@@ -170,6 +176,7 @@ def order_spiral(
     cells: list[Polygon] = []
     kept: list[Polygon] = []
     core_covered = 0.0
+    refused: InvalidParameterError | None = None
     for part in core_parts:
         try:
             core = general.plan_general(
@@ -183,7 +190,8 @@ def order_spiral(
                 vehicle=machine,
                 implement_width_m=implement,
             )
-        except InvalidParameterError:
+        except InvalidParameterError as error:
+            refused = refused or error
             continue  # a core too small for the vehicle's turns: the rounds cover round it
         joiner.add_core(core.route)
         heading = core.heading_deg
@@ -192,6 +200,14 @@ def order_spiral(
         kept.append(part)
         core_covered += core.lines_coverage_ratio * float(part.area)
     joiner.finish()
+    if round_index == 0 and not kept:
+        if refused is not None:
+            raise refused  # nothing fits: the core's error names the vehicle and the field
+        raise InvalidParameterError(
+            "vehicle",
+            f"a {turning_radius_m(machine):g} m turning radius leaves no round or line "
+            "in this field",
+        )
 
     field_area = float(field_local.area)
     covered = core_covered
@@ -314,14 +330,14 @@ def _nearest_first(rings: list[LinearRing], here: tuple[float, float] | None) ->
 
 
 def resample_ring(ring: LinearRing, step_m: float) -> FloatArray:
-    """Points evenly along a closed ring, at most ``step_m`` apart, the first not repeated.
+    """Return points evenly along a closed ring, at most ``step_m`` apart; not closed.
 
     Even steps keep the three-point curvature of the buffers' polygonal arcs at their radius.
     """
     length = float(ring.length)
-    n = max(3, math.ceil(length / step_m - 1e-9))
     if length <= 0.0:
         return np.asarray(ring.coords)[:1]
+    n = max(3, math.ceil(length / step_m - 1e-9))
     along = np.arange(n) * (length / n)
     return np.asarray(shapely.get_coordinates(shapely.line_interpolate_point(ring, along)))
 
@@ -336,8 +352,9 @@ class _Joiner:
         self.router = router
         self.allowed = allowed
         self.radius = radius
-        # Steps short enough that a chord of the tightest arc stays within 1 cm of it.
-        self.step = min(STEP_M, 2.0 * math.sqrt(2.0 * radius * SAGITTA_M))
+        # Steps short enough that a chord of the tightest arc stays within 1 cm of it (and
+        # no shorter than 15 cm: a vehicle that tight turns on the spot).
+        self.step = min(STEP_M, max(_MIN_STEP_M, 2.0 * math.sqrt(2.0 * radius * SAGITTA_M)))
         #: The round being driven, its points from the entry on, and its round index.
         self.ring: FloatArray | None = None
         self.ring_index: int | None = None
@@ -435,13 +452,15 @@ class _Joiner:
         xy = self.ring[extra % n]
         before = self.ring[(extra - 1) % n]
         yaw = np.arctan2(xy[:, 1] - before[:, 1], xy[:, 0] - before[:, 0])
-        return xy, yaw, extra.astype(float)
+        # Distance driven on along the round past its entry [m].
+        along = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))))
+        return xy, yaw, along
 
     def _best(
         self,
         dep_xy: FloatArray,
         dep_yaw: FloatArray,
-        extra: FloatArray,
+        along: FloatArray,
         to_xy: FloatArray,
         to_yaw: FloatArray,
     ) -> int | None:
@@ -452,17 +471,21 @@ class _Joiner:
         owner = np.repeat(np.arange(len(curves)), np.diff(curves.offsets))
         bad = np.zeros(len(curves), dtype=bool)
         np.logical_or.at(bad, owner, ~inside)
-        cost = np.where(bad, np.inf, curves.length_m + extra * self.step)
-        if not np.isfinite(cost).any():
-            return None
-        k = int(np.argmin(cost))
-        self._curve = curves.curve(k).copy()
-        return k
+        cost = np.where(bad, np.inf, curves.length_m + along)
+        # The points are inside; the cheapest curves whose chords are too (exact check).
+        for k in np.argsort(cost, kind="stable")[:_EXACT_CHECKS]:
+            if not np.isfinite(cost[k]):
+                return None
+            curve = curves.curve(int(k))
+            if shapely.covers(self.allowed, shapely.LineString(curve)):
+                self._curve = curve.copy()
+                return int(k)
+        return None
 
     def _join_to_ring(self, points: FloatArray) -> tuple[FloatArray, int, int]:
         """Join the current round to the ring ``points``: curve, extra points, arrival index."""
-        dep_xy, dep_yaw, extra = self._departures()
-        ahead = np.array([0.0, 1.0, 2.0, 4.0]) * self.radius + 2.0 * self.step
+        dep_xy, dep_yaw, along = self._departures()
+        ahead = np.array([0.0, 1.0, 2.0, 4.0]) * self.radius + 2.0 * STEP_M
         nxt = np.roll(points, -1, axis=0)
         ring_yaw = np.arctan2(nxt[:, 1] - points[:, 1], nxt[:, 0] - points[:, 0])
         tree = shapely.STRtree(np.asarray(shapely.points(points)))
@@ -474,10 +497,11 @@ class _Joiner:
             cand_to.append(nearest)
         i = np.concatenate(cand_dep)
         j = np.concatenate(cand_to)
-        for limit in (min(len(dep_xy), 4 * int(self.radius / self.step) + 40), len(dep_xy)):
+        near = int(np.searchsorted(along, 4.0 * self.radius + 20.0))  # first: close by
+        for limit in (min(len(dep_xy), max(near, 2)), len(dep_xy)):
             use = i < limit
             k = self._best(
-                dep_xy[i[use]], dep_yaw[i[use]], extra[i[use]], points[j[use]], ring_yaw[j[use]]
+                dep_xy[i[use]], dep_yaw[i[use]], along[i[use]], points[j[use]], ring_yaw[j[use]]
             )
             if k is not None:
                 return self._curve, int(i[use][k]), int(j[use][k])
@@ -489,9 +513,9 @@ class _Joiner:
 
     def _join_to_pose(self, xy: FloatArray, yaw: float) -> tuple[FloatArray, int]:
         """Join the current round to the pose ``(xy, yaw)``: curve and extra points."""
-        dep_xy, dep_yaw, extra = self._departures()
+        dep_xy, dep_yaw, along = self._departures()
         n = len(dep_xy)
-        k = self._best(dep_xy, dep_yaw, extra, np.repeat(xy[None, :], n, axis=0), np.full(n, yaw))
+        k = self._best(dep_xy, dep_yaw, along, np.repeat(xy[None, :], n, axis=0), np.full(n, yaw))
         if k is not None:
             return self._curve, k
         assert self.ring is not None
