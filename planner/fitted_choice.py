@@ -106,11 +106,14 @@ def choose_convex(
     >>> from shapely import box
     >>> from planner.angles import HeadingChoice
     >>> from planner.vehicles import resolve_vehicle
+    >>> from planner.ordering import score_headings
+    >>> field = box(0, 0, 40, 12)
+    >>> ring = np.asarray(field.exterior.coords)[:-1]
     >>> picked = choose_convex(
-    ...     box(0, 0, 40, 12), HeadingChoice(90.0, 0, 1.0, 0.0, ((0.0, 0), (90.0, 0))),
+    ...     field, HeadingChoice(90.0, 0, 1.0, 0.0, ((0.0, 0), (90.0, 0))),
     ...     interval_m=4.0, implement_width_m=4.0, vehicle=resolve_vehicle("hand_tractor"),
     ...     pattern="boustrophedon", objective="shortest_path", start_xy=None, finish_xy=None,
-    ...     lengths_of=None)
+    ...     lengths_of=lambda h: score_headings(ring, h, 4.0, None, None))
     >>> picked.chosen.heading_deg, picked.coverage_given_up_pp <= 0.2
     (90.0, True)
     """

@@ -7,6 +7,7 @@ is exact wherever on Earth they are put.
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -14,9 +15,16 @@ from typing import Any
 import numpy as np
 import pytest
 import shapely
+from hypothesis import settings
 from shapely import Polygon
 
 from planner.projection import local_frame
+
+# The same examples on every run (CI and a developer's `make test` see the same); set
+# HYPOTHESIS_PROFILE=explore to search new random examples (failures are kept in .hypothesis/).
+settings.register_profile("ci", derandomize=True, print_blob=True)
+settings.register_profile("explore", derandomize=False, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 @pytest.fixture(scope="session")
