@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -273,5 +274,11 @@ def test_a_track_scored_in_small_blocks_scores_as_in_one(paper_plan) -> None:  #
             patch.setattr(module, "CHUNK_FIXES", 7)
         patch.setattr(coverage_module, "CHUNK_SAMPLES", 5)
         blocks = score_track(paper_plan, t, lon, lat, live=True)
-    assert blocks == whole
+    # The same figures; sums over blocks may differ from one pass in the last bit.
+    for name in (f.name for f in dataclasses.fields(whole)):
+        value, got = getattr(whole, name), getattr(blocks, name)
+        if isinstance(value, float):
+            assert got == pytest.approx(value, rel=1e-12, abs=1e-12), name
+        else:
+            assert got == value, name
     assert whole.fix_count == len(lon) > 7 and whole.coverage_ratio > 0
