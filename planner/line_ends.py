@@ -446,7 +446,11 @@ def convex_lines(
         u = line_positions(u_min + margin - d / 2.0, u_max - margin + d / 2.0, d)
     else:
         u = np.array([(machine.u_min + machine.u_max) / 2.0])
-    u = np.clip(u, machine.u_min, machine.u_max)
+    # Lines beyond the machine area's sides (a sliver narrower than the body across) have
+    # nowhere to run: they are left out, and one line down the middle stays if none is left.
+    u = u[(u >= machine.u_min) & (u <= machine.u_max)]
+    if len(u) == 0:
+        u = np.array([(machine.u_min + machine.u_max) / 2.0])
     v_lo = np.interp(u, machine.lo_u, machine.lo_v)
     v_hi = np.interp(u, machine.hi_u, machine.hi_v)
     n = len(u)
