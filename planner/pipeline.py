@@ -6,7 +6,6 @@ This module only chains the stages; the geometry lives in the stage modules.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -16,12 +15,12 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.fitted_choice import choose_convex
-from planner.general import add_fitted_lines
 from planner.heading_coverage import convex_coverage
 from planner.line_ends import fitting_loss_m2
 from planner.lines import line_counts, to_sweep
 from planner.ordering import VariantLengths, score_headings
 from planner.projection import LocalFrame, field_frame
+from planner.route_builder import RouteBuilder, add_fitted_lines
 from planner.spiral import order_spiral
 from planner.turns import driving_time_s
 from planner.types import (
@@ -31,9 +30,7 @@ from planner.types import (
     PathSegment,
     Pattern,
     PlanStats,
-    SegmentKind,
     Vehicle,
-    WaypointRole,
     Waypoints,
     vehicle_dict,
 )
@@ -140,18 +137,8 @@ def plan_coverage(
             vehicle=machine,
             implement_width_m=implement,
         )
-        spiral_route = spiral.route
-        route = _Route(
-            x=spiral_route.x,
-            y=spiral_route.y,
-            roles=spiral_route.roles,
-            lines=spiral_route.lines,
-            segments=spiral_route.segments,
-        )
-        if finish_xy is not None:
-            route.add("finish", None, [finish_xy])
         return _assemble(
-            route,
+            _with_finish(spiral.route, finish_xy),
             frame=frame,
             field_lonlat=field_lonlat,
             cells_local=spiral.cells_local,
@@ -222,12 +209,11 @@ def plan_coverage(
         fixed_heading=fixed_heading is not None,
     )
     heading, fit = picked.chosen.heading_deg, picked.chosen.fit
-    route = _Route()
+    route = RouteBuilder()
     if start_xy is not None:
-        route.add("start", None, [start_xy])
-    add_fitted_lines(route, heading, fit)  # type: ignore[arg-type]
-    if finish_xy is not None:
-        route.add("finish", None, [finish_xy])
+        route.append("transit", None, np.array([start_xy]), "start")
+    add_fitted_lines(route, heading, fit)
+    route = _with_finish(route, finish_xy)
     return _assemble(
         route,
         frame=frame,
@@ -277,14 +263,8 @@ def _plan_general(
         implement_width_m=implement_width_m,
         pattern=pattern,
     )
-    built = plan.route
-    route = _Route(
-        x=built.x, y=built.y, roles=built.roles, lines=built.lines, segments=built.segments
-    )
-    if finish_xy is not None:
-        route.add("finish", None, [finish_xy])
     return _assemble(
-        route,
+        _with_finish(plan.route, finish_xy),
         frame=frame,
         field_lonlat=field_lonlat,
         cells_local=plan.cells_local,
@@ -301,39 +281,18 @@ def _plan_general(
     )
 
 
-@dataclass
-class _Route:
-    """The route under construction, in local metres, with the role of every point."""
-
-    x: list[float] = field(default_factory=list)
-    y: list[float] = field(default_factory=list)
-    roles: list[WaypointRole] = field(default_factory=list)
-    lines: list[int | None] = field(default_factory=list)
-    # (kind, index, first waypoint, last waypoint); a segment shares its ends with neighbours.
-    segments: list[tuple[SegmentKind, int | None, int, int]] = field(default_factory=list)
-
-    def add(self, role: WaypointRole, line: int | None, points: Any) -> None:
-        for px, py in points:
-            self.x.append(float(px))
-            self.y.append(float(py))
-            self.roles.append(role)
-            self.lines.append(line)
-
-    def extend(
-        self,
-        x: FloatArray,
-        y: FloatArray,
-        roles: list[WaypointRole],
-        lines: list[int | None],
-    ) -> None:
-        self.x.extend(x.tolist())
-        self.y.extend(y.tolist())
-        self.roles.extend(roles)
-        self.lines.extend(lines)
+def _with_finish(route: RouteBuilder, finish_xy: tuple[float, float] | None) -> RouteBuilder:
+    """Return ``route`` with the finish point last, if there is one (its leg: :func:`_assemble`)."""
+    if finish_xy is not None:
+        route.x.append(float(finish_xy[0]))
+        route.y.append(float(finish_xy[1]))
+        route.roles.append("finish")
+        route.lines.append(None)
+    return route
 
 
 def _assemble(
-    route: _Route,
+    route: RouteBuilder,
     *,
     frame: LocalFrame,
     field_lonlat: Polygon,
