@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -285,20 +286,28 @@ def round_parts(region: Polygon | MultiPolygon, radius_m: float) -> list[Polygon
 
     :func:`regular_region`'s closing can leave a spike where two discs of the complement
     nearly meet (a pinch narrower than the vehicle's turn: their arcs cross at a corner a few
-    centimetres long). If a ring, resampled as it is driven, bends tighter than the radius
-    allows, an opening rounds such spikes off (within what the closing kept, so still inside
-    ``region``), and is taken if its rings then bend no tighter; the pinch may part the region.
+    centimetres long). Where a ring, resampled as it is driven, bends tighter than the radius
+    allows, an opening rounds the spikes off, within what the closing kept (so still inside
+    ``region``): first only within two radii of the tight points, else everywhere (the pinch
+    may then part the region). The opening makes corners of its own where two of its discs
+    cross, so each is taken only if its rings then bend no tighter; if neither is, there is
+    no round the vehicle can drive here and the result is empty (the rounds end there, and
+    the core inside the last round is covered back and forth).
     """
     regular = regular_region(region, radius_m)
     parts = _parts(regular)
-    if not any(_bends_tighter(ring, radius_m) for p in parts for ring in _rings(p)):
+    tight = [xy for p in parts for ring in _rings(p) for xy in _tight_points(ring, radius_m)]
+    if not tight:
         return parts
     q = _QUAD_SEGS
     eroded = shapely.buffer(regular, -radius_m, quad_segs=q)
-    opened = _parts(shapely.buffer(eroded, radius_m, quad_segs=q))
-    if any(_bends_tighter(ring, radius_m) for p in opened for ring in _rings(p)):
-        return parts  # a corner the opening does not remove either: left as it was
-    return opened
+    spikes = shapely.difference(regular, shapely.buffer(eroded, radius_m, quad_segs=q))
+    near = shapely.buffer(shapely.multipoints(tight), 2.0 * radius_m, quad_segs=q)
+    for cut in (shapely.intersection(spikes, near), spikes):
+        opened = _parts(cast(shapely.Geometry, shapely.difference(regular, cut)))
+        if not any(_tight_points(ring, radius_m) for p in opened for ring in _rings(p)):
+            return opened
+    return []
 
 
 def _rings(polygon: Polygon) -> list[LinearRing]:
@@ -314,24 +323,25 @@ def round_step_m(radius_m: float) -> float:
     return min(STEP_M, max(_MIN_STEP_M, 2.0 * math.sqrt(2.0 * radius_m * SAGITTA_M)))
 
 
-def _bends_tighter(ring: LinearRing, radius_m: float) -> bool:
-    """Whether ``ring``, resampled as it is driven, turns tighter than the vehicle's radius.
+def _tight_points(ring: LinearRing, radius_m: float) -> list[FloatArray]:
+    """Points where ``ring``, resampled as it is driven, turns tighter than the vehicle may.
 
     ``radius_m`` is the planning radius (the vehicle's times :data:`RADIUS_SLACK`); the bound
     is the vehicle's own, so the polygonal arcs of the buffers pass. The ring's own vertices
-    are looked at first (turn over the mean of the two edges): a ring whose every vertex
-    bends no tighter is driven as it is, without resampling it here.
+    are looked at first (turn over the mean of the two edges, or the step if shorter): a ring
+    whose every vertex bends no tighter is not resampled here.
     """
     limit = RADIUS_SLACK / radius_m
     step = round_step_m(radius_m)
     coords = np.asarray(ring.coords)[:-1]
-    if len(coords) < 3 or _max_curvature(coords, turning_step_m=step) <= limit:
-        return False
-    return _max_curvature(resample_ring(ring, step)) > limit
+    if len(coords) < 3 or _curvatures(coords, turning_step_m=step).max() <= limit:
+        return []
+    points = resample_ring(ring, step)
+    return list(points[_curvatures(points) > limit])
 
 
-def _max_curvature(points: FloatArray, *, turning_step_m: float | None = None) -> float:
-    """Largest curvature [1/m] at the points of a closed polyline (not closed in ``points``).
+def _curvatures(points: FloatArray, *, turning_step_m: float | None = None) -> FloatArray:
+    """Curvature [1/m] at each point of a closed polyline (not closed in ``points``).
 
     With ``turning_step_m``, the turn at each vertex over the mean length of its two edges,
     or that step if shorter (a bound for points resampled that far apart); else that of the
@@ -347,7 +357,7 @@ def _max_curvature(points: FloatArray, *, turning_step_m: float | None = None) -
         curvature = np.abs(np.arctan2(cross, dot)) / np.maximum(spread, 1e-300)
     else:
         curvature = 2.0 * np.abs(cross) / np.maximum(l1 * l2 * np.hypot(*(c - a).T), 1e-300)
-    return float(curvature.max()) if len(curvature) else 0.0
+    return np.asarray(curvature, dtype=float)
 
 
 def _parts(geometry: shapely.Geometry) -> list[Polygon]:
