@@ -84,6 +84,7 @@ def headland_ring_sets(
     sets: list[list[LinearRing]] = []
     first = first_pass_offset_m(interval_m, vehicle_width_m)
     r = float(turning_radius_m)
+    outermost: shapely.Geometry | None = None
     for i in range(passes):
         depth = first + i * interval_m
         if r > 0.0:
@@ -102,12 +103,12 @@ def headland_ring_sets(
                 f"the field is too narrow for {passes} headland pass(es) at {interval_m:g} m",
             )
         sets.append(rings)
-    if not sets:
+        outermost = offset if outermost is None else outermost
+    if outermost is None:
         return sets
     sets[0] = sets[0] + spur_rings(
         field_local,
-        sets,
-        passes=passes,
+        outermost,
         interval_m=interval_m,
         vehicle_width_m=vehicle_width_m,
         turning_radius_m=r,
@@ -117,9 +118,8 @@ def headland_ring_sets(
 
 def spur_rings(
     field_local: Polygon,
-    sets: list[list[LinearRing]],
+    outermost: shapely.Geometry,
     *,
-    passes: int,
     interval_m: float,
     vehicle_width_m: float,
     turning_radius_m: float,
@@ -136,6 +136,15 @@ def spur_rings(
     meet in the middle. A part the round would not cover by :data:`SPUR_MIN_SHARE` keeps
     its gap (too narrow for the vehicle to turn in).
 
+    Parameters
+    ----------
+    field_local : Polygon
+    outermost : Geometry
+        What the outermost pass encloses: its footprint and what lies inside it (the inner
+        passes, the lines) reach half an interval beyond it.
+    interval_m, vehicle_width_m, turning_radius_m : float
+        As for :func:`headland_ring_sets` [m].
+
     Returns
     -------
     list of LinearRing
@@ -144,16 +153,8 @@ def spur_rings(
     d = float(interval_m)
     r = float(turning_radius_m)
     half_footprint = d / 2.0
-    reached = shapely.union_all(
-        [
-            ring.buffer(half_footprint, cap_style="flat", join_style="mitre")
-            for rings in sets
-            for ring in rings
-        ]
-    )
-    depth_lines = first_pass_offset_m(d, vehicle_width_m) + (passes - 0.5) * d
-    inner = field_local.buffer(-depth_lines, join_style="mitre")
-    missed = field_local.difference(shapely.union_all([reached, inner]))
+    reached = shapely.buffer(outermost, half_footprint, join_style="mitre")
+    missed = shapely.difference(field_local, reached)
     depth = max(vehicle_width_m / 2.0, _SPUR_MIN_DEPTH_M)
     spurs: list[LinearRing] = []
     for part in shapely.get_parts(missed):
