@@ -22,7 +22,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from app.i18n import DEFAULT_LANGUAGE, negotiate_language
 from app.i18n_errors import translate_detail
-from app.tracks import TrackFormatError
+from app.track_fixes import TrackFormatError
 from navigation import NavigationError
 from planner import InvalidFieldError, InvalidParameterError, PlannerError, PlanTooLargeError
 

@@ -88,7 +88,7 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
         "at {interval} m the field needs at least {count} tillage lines; tillpath plans at "
         "most {limit}: choose a wider interval or a smaller field"
     ),
-    # app/tracks.py: uploaded tracks
+    # app/tracks.py and its readers (app/track_*.py): uploaded tracks
     N_(
         "is not a track file tillpath can read: expected GPX, CSV with a time,lat,lon "
         "header, or an NMEA 0183 log"

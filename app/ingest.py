@@ -30,7 +30,7 @@ import numpy.typing as npt
 from sqlalchemy.orm import Session
 
 from app.models import Fix
-from app.tracks import TrackFix
+from app.track_fixes import TrackFix
 
 #: Rows made into Python tuples at a time when the columns are written.
 BATCH_ROWS: Final = 10_000
@@ -105,7 +105,7 @@ def collect(fixes: Iterable[TrackFix]) -> FixColumns:
     they grow), never one Python object per fix nor the columns twice. (Arrays that grow by
     ``realloc`` move their pages instead of copying them; batches joined at the end would leave
     the freed batches in the process's resident memory.) Out of order, the columns are sorted
-    one at a time. A :class:`~app.tracks.TrackFormatError` raised while reading propagates
+    one at a time. A :class:`~app.track_fixes.TrackFormatError` raised while reading propagates
     unchanged.
 
     Examples

@@ -28,7 +28,7 @@ from app.db import end_reads
 from app.errors import NotFoundError
 from app.models import Fix, Run
 from app.runs import MAX_TRACK_POINTS, RunTrack, _finite, _thin, run_view
-from app.tracks import datetime_to_us, us_to_datetime
+from app.track_fixes import datetime_to_us, us_to_datetime
 
 #: Least time between two background recomputations of one run's metrics [s].
 REFRESH_INTERVAL_S: Final = 5.0

@@ -211,7 +211,7 @@ class Fix(Base):
         Speed over ground [m/s].
     quality : str or None
         Fix quality where the log says it (``rtk_fixed``, ``rtk_float``, ``dgps``, ``single``,
-        ``dead_reckoning``; :data:`app.tracks.FIX_QUALITIES`).
+        ``dead_reckoning``; :data:`app.track_fixes.FIX_QUALITIES`).
     hdop : float or None
         Horizontal dilution of precision.
     satellites : int or None

@@ -16,7 +16,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-from app.tracks import FIX_QUALITIES
+from app.track_fixes import FIX_QUALITIES
 
 #: Share of fixes of a grade above which the whole run counts as that grade.
 MAJORITY: Final = 0.9
@@ -47,7 +47,7 @@ def receiver_report(
     Parameters
     ----------
     quality : sequence of str or None
-        Each fix's quality (:data:`app.tracks.FIX_QUALITIES`), None where unknown.
+        Each fix's quality (:data:`app.track_fixes.FIX_QUALITIES`), None where unknown.
     hdop, satellites : sequences of float
         NaN where unknown.
 

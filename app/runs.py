@@ -39,15 +39,15 @@ from app.services import (
     json_ready,
     read_stored,
 )
-from app.tracks import (
+from app.track_fixes import (
     ParsedTrack,
     TrackFix,
     TrackFormatError,
-    TrackStream,
     check_not_empty,
     parse_time,
     us_to_datetime,
 )
+from app.tracks import TrackStream
 from navigation import TrackMetrics, score_track
 from planner.export.gpx import GpxTrack, plan_to_gpx
 from planner.export.kml import plan_to_kml
@@ -77,7 +77,7 @@ class RunTrack:
     heading_deg, speed_mps : float arrays
         NaN where unknown.
     quality : sequence of (str or None)
-        Fix quality per fix (:data:`app.tracks.FIX_QUALITIES`), None where unknown.
+        Fix quality per fix (:data:`app.track_fixes.FIX_QUALITIES`), None where unknown.
     hdop, satellites : float arrays
         NaN where unknown.
     """

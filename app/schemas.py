@@ -13,7 +13,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from app.models import PLAN_NAME_MAX_LENGTH
-from app.tracks import MAX_HEADING_DEG, MAX_SPEED_MPS, MAX_TIME_TEXT, check_text
+from app.track_fixes import MAX_HEADING_DEG, MAX_SPEED_MPS, MAX_TIME_TEXT, check_text
 
 
 def _no_control(value: str | None) -> str | None:

@@ -36,7 +36,7 @@ from app.schemas import (
     SimulationList,
     SimulationSummary,
 )
-from app.tracks import check_text
+from app.track_fixes import check_text
 from navigation import GuidanceParams, SimulationConfig, simulate
 from navigation.export import simulation_to_geojson
 from planner.export import (

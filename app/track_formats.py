@@ -34,12 +34,7 @@ import math
 import re
 from typing import Any, Final
 
-from app.tracks import (
-    TrackFix,
-    TrackFormatError,
-    check_position,
-    datetime_to_us,
-)
+from app.track_fixes import TrackFix, TrackFormatError, check_position, datetime_to_us
 from planner.errors import UnreadableFileError
 from planner.io.safety import check_xml
 

@@ -2,8 +2,9 @@
 
 - the map page's first load in Chromium, as transferred (Chrome DevTools' ``encodedDataLength``:
   headers and compressed bodies), with an empty cache (product.md §11: ≤ 250 KB);
-- a 4 ha field's simulation answer (``POST /api/plans/{id}/simulations``) as the API sends it,
-  with and without gzip, in full and thinned for drawing (``?tracks=display``).
+- a 4 ha field's simulation as the API sends it, with and without gzip, in full and thinned
+  for drawing (``?tracks=display``): submitted as a job (``POST /api/plans/{id}/simulations``,
+  202), followed (``GET /api/jobs/{id}``) and fetched when done (``GET /api/simulations/{id}``).
 
 Run from the repository root (starts its own server unless ``--url`` is given)::
 
@@ -20,6 +21,7 @@ import json
 import math
 import shutil
 import tempfile
+import time
 import urllib.error
 import urllib.request
 from collections.abc import Iterator
@@ -88,8 +90,38 @@ def get(url: str, *, gzip_ok: bool) -> tuple[bytes, str]:
         return r.read(), r.headers.get("content-encoding", "")
 
 
+#: How often the job is asked after, as the page does (static/js/jobs.js) [s].
+JOB_POLL_S = 0.25
+#: How long a 4 ha simulation may take before the benchmark gives up [s].
+JOB_TIMEOUT_S = 300.0
+
+
+def follow_job(base: str, job: dict[str, Any]) -> dict[str, Any]:
+    """Poll ``GET /api/jobs/{id}`` until the job is done, as the page does (product.md §13).
+
+    Raises
+    ------
+    RuntimeError
+        If the job fails, is cancelled or is not done within :data:`JOB_TIMEOUT_S`.
+    """
+    deadline = time.monotonic() + JOB_TIMEOUT_S
+    while job["status"] != "done":
+        if job["status"] in ("failed", "cancelled"):
+            raise RuntimeError(f"simulation job {job['id']} {job['status']}: {job.get('error')}")
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"simulation job {job['id']} not done in {JOB_TIMEOUT_S:g} s")
+        time.sleep(JOB_POLL_S)
+        body, _ = get(f"{base}/api/jobs/{job['id']}", gzip_ok=False)
+        job = json.loads(body)
+    return job
+
+
 def simulation_sizes(base: str) -> dict[str, int]:
-    """Bytes of a 4 ha simulation answer: full and display, with and without gzip."""
+    """Bytes of a 4 ha simulation answer: full and display, with and without gzip.
+
+    A simulation is a background job: it is submitted (202, the job), followed until done,
+    and the stored simulation its result names is then fetched, as the page does.
+    """
     log_in(base)
     _, plan_body, _ = post(
         f"{base}/api/plans",
@@ -98,11 +130,13 @@ def simulation_sizes(base: str) -> dict[str, int]:
     )
     plan = json.loads(plan_body)
     sizes: dict[str, int] = {}
-    _, full, _ = post(f"{base}/api/plans/{plan['id']}/simulations", {"seed": 1}, gzip_ok=False)
+    _, started, _ = post(f"{base}/api/plans/{plan['id']}/simulations", {"seed": 1}, gzip_ok=False)
+    sizes["simulation job, as submitted (202), identity"] = len(started)
+    job = follow_job(base, json.loads(started))
+    sim_url = f"{base}/api/simulations/{job['result']['simulation_id']}"
+    full, _ = get(sim_url, gzip_ok=False)
     sizes["simulation, full, identity"] = len(full)
     sizes["simulation, full, gzip (computed)"] = len(gzip.compress(full))
-    simulation = json.loads(full)
-    sim_url = f"{base}/api/simulations/{simulation['id']}"
     body, encoding = get(sim_url, gzip_ok=True)
     sizes[f"GET simulation, full, as sent ({encoding or 'identity'})"] = len(body)
     try:

@@ -34,7 +34,7 @@ from app.models import Plan, Run
 from app.schemas import PlanCreate
 from app.services import plan_field
 from app.testing import scratch_pg_database
-from app.tracks import TrackFix
+from app.track_fixes import TrackFix
 from planner import local_frame
 
 FIXES = 216_000  # 6 h at 10 Hz

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -148,8 +149,10 @@ def order_spiral(
     # Where the body may be: the joins are checked against it.
     allowed = field_local.buffer(-(half - _BODY_MARGIN_M), quad_segs=_QUAD_SEGS)
     shapely.prepare(allowed)
-    # Round 0 runs d/2 inside the boundary; a body wider than the interval needs more.
-    first_m = max(d / 2.0, half)
+    # Round 0 runs d/2 inside the boundary; a body wider than the interval needs more, and
+    # then the sagitta of the round's chords too: round the field's inner corners a chord
+    # cuts towards the bund by up to that much, which would use up R1's 1 cm.
+    first_m = max(d / 2.0, half + SAGITTA_M)
     levels, regions = _round_levels(field_local, first_m, d, radius)
     core_parts: list[Polygon] = []
     if regions:
@@ -278,6 +281,85 @@ def regular_region(
     return kept.buffer(-r, quad_segs=q).buffer(2.0 * r, quad_segs=q).buffer(-r, quad_segs=q)
 
 
+def round_parts(region: Polygon | MultiPolygon, radius_m: float) -> list[Polygon]:
+    """Return the parts of ``region`` whose rings a vehicle of radius ``radius_m`` drives.
+
+    :func:`regular_region`'s closing can leave a spike where two discs of the complement
+    nearly meet (a pinch narrower than the vehicle's turn: their arcs cross at a corner a few
+    centimetres long). Where a ring, resampled as it is driven, bends tighter than the radius
+    allows, an opening rounds the spikes off, within what the closing kept (so still inside
+    ``region``): first only within two radii of the tight points, else everywhere (the pinch
+    may then part the region). The opening makes corners of its own where two of its discs
+    cross, so each is taken only if its rings then bend no tighter; if neither is, there is
+    no round the vehicle can drive here and the result is empty (the rounds end there, and
+    the core inside the last round is covered back and forth).
+    """
+    regular = regular_region(region, radius_m)
+    parts = _parts(regular)
+    tight = [xy for p in parts for ring in _rings(p) for xy in _tight_points(ring, radius_m)]
+    if not tight:
+        return parts
+    q = _QUAD_SEGS
+    eroded = shapely.buffer(regular, -radius_m, quad_segs=q)
+    spikes = shapely.difference(regular, shapely.buffer(eroded, radius_m, quad_segs=q))
+    near = shapely.buffer(shapely.multipoints(tight), 2.0 * radius_m, quad_segs=q)
+    for cut in (shapely.intersection(spikes, near), spikes):
+        opened = _parts(cast(shapely.Geometry, shapely.difference(regular, cut)))
+        if not any(_tight_points(ring, radius_m) for p in opened for ring in _rings(p)):
+            return opened
+    return []
+
+
+def _rings(polygon: Polygon) -> list[LinearRing]:
+    return [polygon.exterior, *polygon.interiors]
+
+
+def round_step_m(radius_m: float) -> float:
+    """Return the step between a round's points for a turning radius [m].
+
+    Short enough that a chord of the tightest arc stays within :data:`SAGITTA_M` of it, and
+    no shorter than 15 cm (a vehicle that tight turns on the spot).
+    """
+    return min(STEP_M, max(_MIN_STEP_M, 2.0 * math.sqrt(2.0 * radius_m * SAGITTA_M)))
+
+
+def _tight_points(ring: LinearRing, radius_m: float) -> list[FloatArray]:
+    """Points where ``ring``, resampled as it is driven, turns tighter than the vehicle may.
+
+    ``radius_m`` is the planning radius (the vehicle's times :data:`RADIUS_SLACK`); the bound
+    is the vehicle's own, so the polygonal arcs of the buffers pass. The ring's own vertices
+    are looked at first (turn over the mean of the two edges, or the step if shorter): a ring
+    whose every vertex bends no tighter is not resampled here.
+    """
+    limit = RADIUS_SLACK / radius_m
+    step = round_step_m(radius_m)
+    coords = np.asarray(ring.coords)[:-1]
+    if len(coords) < 3 or _curvatures(coords, turning_step_m=step).max() <= limit:
+        return []
+    points = resample_ring(ring, step)
+    return list(points[_curvatures(points) > limit])
+
+
+def _curvatures(points: FloatArray, *, turning_step_m: float | None = None) -> FloatArray:
+    """Curvature [1/m] at each point of a closed polyline (not closed in ``points``).
+
+    With ``turning_step_m``, the turn at each vertex over the mean length of its two edges,
+    or that step if shorter (a bound for points resampled that far apart); else that of the
+    circle through each three points.
+    """
+    a, b, c = np.roll(points, 1, axis=0), points, np.roll(points, -1, axis=0)
+    ab, bc = b - a, c - b
+    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
+    dot = np.einsum("ij,ij->i", ab, bc)
+    l1, l2 = np.hypot(*ab.T), np.hypot(*bc.T)
+    if turning_step_m is not None:
+        spread = np.minimum((l1 + l2) / 2.0, turning_step_m)
+        curvature = np.abs(np.arctan2(cross, dot)) / np.maximum(spread, 1e-300)
+    else:
+        curvature = 2.0 * np.abs(cross) / np.maximum(l1 * l2 * np.hypot(*(c - a).T), 1e-300)
+    return np.asarray(curvature, dtype=float)
+
+
 def _parts(geometry: shapely.Geometry) -> list[Polygon]:
     parts = [
         shapely.orient_polygons(p)
@@ -294,7 +376,8 @@ def _round_levels(
     """Return the rings of every round level, outermost first, and the regions they enclose.
 
     A level is kept while its region exists and is in no more pieces than the field's first
-    offset (a neck that splits it ends the rounds there).
+    offset, or than the first round's region if a pinch too tight for the radius parted it
+    (a neck that splits a later level ends the rounds there).
     """
     levels: list[list[LinearRing]] = []
     regions: list[Polygon | MultiPolygon] = []
@@ -303,7 +386,11 @@ def _round_levels(
         offset = field_local.buffer(-(first_m + i * d), quad_segs=_QUAD_SEGS)
         if offset.is_empty:
             break
-        parts = _parts(regular_region(offset, radius_m))
+        parts = round_parts(offset, radius_m)
+        if i == 0:
+            # A pinch too tight for the radius parts the first round: its pieces are the
+            # field's pieces from here on.
+            pieces = max(pieces, len(parts))
         if not parts or len(parts) > pieces:
             break
         levels.append([ring for p in parts for ring in (p.exterior, *p.interiors)])
@@ -352,9 +439,7 @@ class _Joiner:
         self.router = router
         self.allowed = allowed
         self.radius = radius
-        # Steps short enough that a chord of the tightest arc stays within 1 cm of it (and
-        # no shorter than 15 cm: a vehicle that tight turns on the spot).
-        self.step = min(STEP_M, max(_MIN_STEP_M, 2.0 * math.sqrt(2.0 * radius * SAGITTA_M)))
+        self.step = round_step_m(radius)
         #: The round being driven, its points from the entry on, and its round index.
         self.ring: FloatArray | None = None
         self.ring_index: int | None = None

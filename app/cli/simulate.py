@@ -328,7 +328,8 @@ def fit_static_log(path: Path) -> Any:
     """Read a static log (any track format) and fit the GPS model to it (``--gps-from``)."""
     import numpy as np
 
-    from app.tracks import TrackFormatError, parse_track
+    from app.track_fixes import TrackFormatError
+    from app.tracks import parse_track
     from navigation import NavigationError
     from navigation.gps_fit import fit_gps_params
     from planner.projection import local_frame

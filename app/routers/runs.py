@@ -15,7 +15,8 @@ from app.models import PLAN_NAME_MAX_LENGTH, Plan
 from app.routers.downloads import download
 from app.schemas import ErrorRead, FixesAdded, FixIn, PlanRead, RunList, RunRead
 from app.settings import Settings, get_settings
-from app.tracks import MAX_TIME_TEXT, check_text, parse_time, read_track
+from app.track_fixes import MAX_TIME_TEXT, check_text, parse_time
+from app.tracks import read_track
 
 router = APIRouter(tags=["runs"])
 

@@ -31,7 +31,7 @@ from app.errors import (
     status_for,
 )
 from app.models import Plan
-from app.tracks import TrackFormatError
+from app.track_fixes import TrackFormatError
 from navigation import NavigationError
 from planner import InvalidFieldError, InvalidParameterError, PlannerError, PlanTooLargeError
 

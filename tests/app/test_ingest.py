@@ -19,7 +19,7 @@ from app import accounts, ingest, runs
 from app.db import add_row, delete_row, get_engine, write
 from app.errors import ConflictError, NotFoundError
 from app.models import Fix, Plan, Run, Simulation
-from app.tracks import TrackFix
+from app.track_fixes import TrackFix
 from tests.app.test_live_server import database_url  # noqa: F401
 
 T0 = 1_795_305_600_000_000  # 2026-11-22T00:00:00Z [µs]

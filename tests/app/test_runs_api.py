@@ -20,7 +20,7 @@ from app.models import Fix, Run
 from app.schemas import MAX_FIXES_PER_BATCH
 from navigation import score_track
 from tests.app.conftest import GPX_XSD, TEST_MAX_UPLOAD_BYTES
-from tests.app.test_track_formats import BILLION_LAUGHS
+from tests.app.test_track_gpx import BILLION_LAUGHS
 from tests.app.track_files import (
     RUN_START,
     csv_file,

@@ -22,8 +22,9 @@ from sqlalchemy.orm import Session
 from starlette.testclient import TestClient
 
 from app.models import Run
+from app.track_fixes import TrackFormatError, datetime_to_us
 from app.track_formats import gps_to_utc
-from app.tracks import TrackFormatError, datetime_to_us, parse_track
+from app.tracks import parse_track
 from planner.export.gpx import GpxTrack, plan_to_gpx
 from planner.export.kml import tracks_to_kml
 from tests.app.conftest import wait_for_job

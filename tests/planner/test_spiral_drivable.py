@@ -65,12 +65,15 @@ def assert_spiral_drivable(plan: CoveragePlan, *, curvature: bool = True) -> Non
             assert (turn_curvatures(seam) <= 1.0 / radius * 1.02 + 0.02).all()
 
 
-@st.composite
-def fields_with_round_holes(draw: st.DrawFn, *, convex: bool) -> Polygon:
-    """A convex hull or a star-shaped field of 60–160 m with 0–2 round holes (ponds, trees)."""
-    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
-    size = draw(st.floats(60.0, 160.0))
-    n = draw(st.integers(3, 12))
+def round_holes_field(
+    seed: int, size: float, n: int, hole_radii: list[float], *, convex: bool
+) -> Polygon:
+    """A convex hull or a star-shaped field of ``size`` m with round holes (ponds, trees).
+
+    ``seed`` places the vertices and the holes; a hole that would not lie 4 m inside the
+    field and 4 m from the others is left out.
+    """
+    rng = np.random.default_rng(seed)
     if convex:
         outer = shapely.MultiPoint(rng.uniform(-0.5, 0.5, (max(n, 5), 2)) * size).convex_hull
     else:
@@ -80,8 +83,7 @@ def fields_with_round_holes(draw: st.DrawFn, *, convex: bool) -> Polygon:
     if not isinstance(outer, Polygon) or not outer.is_valid or outer.area < 0.2 * size**2:
         outer = shapely.box(-size / 2, -size / 3, size / 2, size / 3)
     holes: list[Polygon] = []
-    for _ in range(draw(st.integers(0, 2))):
-        r = draw(st.floats(0.5, 0.08 * size))
+    for r in hole_radii:
         centre = shapely.Point(rng.uniform(-0.25, 0.25, 2) * size)
         hole = centre.buffer(r, quad_segs=8)
         if outer.buffer(-4.0).contains(hole) and all(hole.distance(h) > 4.0 for h in holes):
@@ -90,14 +92,52 @@ def fields_with_round_holes(draw: st.DrawFn, *, convex: bool) -> Polygon:
     return shapely.orient_polygons(field)  # type: ignore[no-any-return]
 
 
-#: Known weakness (report of branch i9s): on some fields hypothesis finds a round whose region,
-#: after the buffers of :func:`planner.spiral.regular_region`, keeps a corner of a few
-#: centimetres (a 79° turn between 1 cm segments), so the curvature bound is not yet met
-#: everywhere; the body and continuity properties are.
+@st.composite
+def fields_with_round_holes(draw: st.DrawFn, *, convex: bool) -> Polygon:
+    """A convex hull or a star-shaped field of 60–160 m with 0–2 round holes (ponds, trees)."""
+    seed = draw(st.integers(0, 2**32 - 1))
+    size = draw(st.floats(60.0, 160.0))
+    n = draw(st.integers(3, 12))
+    hole_radii = [draw(st.floats(0.5, 0.08 * size)) for _ in range(draw(st.integers(0, 2)))]
+    return round_holes_field(seed, size, n, hole_radii, convex=convex)
+
+
+#: Known weakness: the rounds themselves bend no tighter than the radius now
+#: (:func:`planner.spiral.round_parts`; the fields below), but a join that finds no Dubins
+#: curve inside the field falls back to the routed move (:class:`planner.routing.FieldRouter`:
+#: corners, points metres apart), which breaks the curvature bound on some fields that
+#: ``HYPOTHESIS_PROFILE=explore`` finds, e.g. ``round_holes_field(23755, 60.0, 7, [1.0, 1.0],
+#: convex=False)`` with the small tractor at 2.5 m; the body and continuity properties hold.
 CURVATURE_XFAIL = pytest.mark.xfail(
-    reason="regular_region leaves a corner on some fields (a shapely buffer artefact, open)",
+    reason="a join with no Dubins curve inside the field falls back to a routed move (open)",
     strict=False,
 )
+
+
+#: Fields hypothesis found (``HYPOTHESIS_PROFILE=explore``) where a round broke the vehicle's
+#: bounds: (seed, size, vertices, hole radii, convex), preset, interval.
+FOUND_FIELDS = [
+    # A pinch narrower than the 3 m turn: the closing left a 99° spike between two arcs.
+    pytest.param((1, 60.0, 7, [0.5], False), "small_tractor", 2.5, id="pinch-spike"),
+    # A tree near a pinch: an opening after the closing (the spike's remedy, if taken
+    # everywhere) leaves a 65° corner in its round where two of the discs cross.
+    pytest.param((250, 64.0, 3, [0.5], False), "rover", 2.5, id="tree-corner"),
+    # A body wider than the interval: the first round's chords cut 1.1 cm towards the bund
+    # round an inner corner.
+    pytest.param((156, 60.0, 6, [], False), "paper_g1000", 1.5, id="chord-at-the-bund"),
+]
+
+
+@pytest.mark.parametrize(("shape", "preset", "interval"), FOUND_FIELDS)
+def test_found_fields_are_drivable_spirals(
+    shape: tuple[int, float, int, list[float], bool], preset: str, interval: float
+) -> None:
+    seed, size, n, hole_radii, convex = shape
+    field = round_holes_field(seed, size, n, hole_radii, convex=convex)
+    plan = plan_coverage(
+        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=preset
+    )
+    assert_spiral_drivable(plan)
 
 
 @pytest.mark.parametrize("curvature", [pytest.param(True, marks=CURVATURE_XFAIL), False])
