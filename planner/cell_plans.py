@@ -16,7 +16,7 @@ import numpy.typing as npt
 from shapely import Polygon
 
 from planner.cell_order import CellVariants, order_cells
-from planner.coverage import Chains, convex_chains, covered_area
+from planner.coverage import Chains, convex_chains, covered_cells
 from planner.decomposition import decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import variant_ends, variant_lengths
@@ -87,9 +87,8 @@ def plan_heading(
     working = float(lengths.working.sum())
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + order_length(variants, order, start_xy, finish_xy, None)
-    covered = sum(
-        covered_area(c.chains, scan.u[c.lines], scan.v_lo[c.lines], scan.v_hi[c.lines], d)
-        for c in cells
+    covered = covered_cells(
+        [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
     )
     return CellPlan(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
 
