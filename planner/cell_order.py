@@ -90,6 +90,8 @@ def order_cells(
     last = np.zeros((m, 4))
     if finish_xy is not None:
         last += np.hypot(*(cells.exit_xy - np.asarray(finish_xy)).transpose(2, 0, 1))
+    if m == 1:  # one cell: its best variant (what the exhaustive search below would find)
+        return [(0, int(np.argmin(first[0] + last[0])))]
     # move[c, w, c2, w2]: from the exit of (c, w) to the entry of (c2, w2). Hundreds of cells
     # (a jagged boundary) would make it gigabytes: straight moves are then computed as needed.
     ex = cells.exit_xy.reshape(m * 4, 2)

@@ -234,6 +234,11 @@ def plan_general(
         slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
 
         def fit(plan: CellPlan) -> FittedCells:
+            # Beyond a few cells the cheap plans order them greedily; a heading fitted is a
+            # candidate for the route, so its order is improved first (as the winner's would
+            # be), and headings are compared on the lengths they will really have.
+            if len(plan.cells) > EXHAUSTIVE_MAX_CELLS:
+                plan = reorder(plan, start_xy, after_lines, None)
             return fit_candidate(
                 plan,
                 field_local=field_local,
@@ -256,7 +261,8 @@ def plan_general(
         # Round holes a straight line is a poor guess of a move between cells: the
         # winner's few cells are reordered with routed moves (many cells cost too much).
         routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
-        best = reorder(best, start_xy, after_lines, router.distances if routed else None)
+        if routed:  # (straight moves: its order was improved before it was fitted)
+            best = reorder(best, start_xy, after_lines, router.distances)
 
     route = RouteBuilder()
     if start_xy is not None:
