@@ -8,7 +8,7 @@ headland passes, its lines reach the headland (:func:`reach_headland`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,7 +17,7 @@ from shapely import Polygon
 
 from planner.cell_order import CellVariants, order_cells
 from planner.coverage import Chains, convex_chains, covered_cells
-from planner.decomposition import decompose_sweep
+from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import variant_ends, variant_lengths
 from planner.types import Objective
@@ -60,14 +60,17 @@ def better(candidate: CellPlan, best: CellPlan, objective: Objective) -> bool:
 
 
 def plan_heading(
-    parts: list[Polygon],
+    parts: Sequence[Polygon | SweepRings],
     heading: float,
     d: float,
     start_xy: tuple[float, float] | None,
     finish_xy: tuple[float, float] | None,
     edge_m: float,
 ) -> CellPlan:
-    """Decompose, scan and order the cells at one heading; turns and moves straight."""
+    """Decompose, scan and order the cells at one heading; turns and moves straight.
+
+    ``parts`` may be prepared by :func:`planner.decomposition.sweep_rings` (many headings).
+    """
     rings = [ring for part in parts for ring in decompose_sweep(part, heading)]
     scan = scan_cells(rings, d, edge_m=edge_m)
     cells = [

@@ -71,8 +71,52 @@ def decompose(field_local: Polygon, heading_deg: float) -> list[Polygon]:
     ]
 
 
+@dataclass(frozen=True, slots=True)
+class SweepRings:
+    """A field's rings as arrays, ready to be decomposed at any heading.
+
+    Attributes
+    ----------
+    field : Polygon
+        The field, oriented (exterior counter-clockwise, holes clockwise), local [m].
+    x, y : ndarray
+        Every ring's vertices, the exterior first, not closed [m].
+    sizes, first : ndarray of int
+        Vertices per ring, and where each ring begins.
+    ring_of, local, nxt, prv : ndarray of int
+        Per vertex: its ring, its place in it, and the next and previous vertex round it.
+    """
+
+    field: Polygon
+    x: FloatArray
+    y: FloatArray
+    sizes: IntArray
+    first: IntArray
+    ring_of: IntArray
+    local: IntArray
+    nxt: IntArray
+    prv: IntArray
+
+
+def sweep_rings(field_local: Polygon) -> SweepRings:
+    """Prepare ``field_local`` for :func:`decompose_sweep` at many headings."""
+    field_local = shapely.orient_polygons(field_local)
+    rings = shapely.get_rings(field_local)
+    coords = shapely.get_coordinates(rings)
+    sizes = (shapely.get_num_coordinates(rings) - 1).astype(np.int64)
+    keep = np.ones(len(coords), dtype=bool)
+    keep[np.cumsum(sizes + 1) - 1] = False
+    first = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    ring_of = np.repeat(np.arange(len(sizes)), sizes)
+    local = np.arange(int(sizes.sum())) - first[ring_of]
+    nxt = first[ring_of] + (local + 1) % sizes[ring_of]
+    prv = first[ring_of] + (local - 1) % sizes[ring_of]
+    xy = coords[keep]
+    return SweepRings(field_local, xy[:, 0], xy[:, 1], sizes, first, ring_of, local, nxt, prv)
+
+
 def decompose_sweep(
-    field_local: Polygon, heading_deg: float
+    field_local: Polygon | SweepRings, heading_deg: float
 ) -> list[tuple[FloatArray, FloatArray]]:
     """Return the cells of :func:`decompose` as counter-clockwise rings in the sweep frame.
 
@@ -83,30 +127,26 @@ def decompose_sweep(
     runs at once, without clipping polygons. A boundary too degenerate for that (runs that
     do not alternate, or that end off the cuts) is clipped into slabs by shapely instead.
 
+    Parameters
+    ----------
+    field_local : Polygon or SweepRings
+        The field, or it prepared by :func:`sweep_rings` (for many headings).
+    heading_deg : float
+
     Returns
     -------
     list of (ndarray, ndarray)
         ``(u, v)`` of each cell's exterior [m], not closed, in :func:`decompose` order.
     """
-    field_local = shapely.orient_polygons(field_local)
-    rings = shapely.get_rings(field_local)
-    coords = shapely.get_coordinates(rings)
-    sizes = (shapely.get_num_coordinates(rings) - 1).astype(np.int64)
-    keep = np.ones(len(coords), dtype=bool)
-    keep[np.cumsum(sizes + 1) - 1] = False
-    u, v = to_sweep(coords[keep, 0], coords[keep, 1], heading_deg)
-    first = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    ring_of = np.repeat(np.arange(len(sizes)), sizes)
-    local = np.arange(len(u)) - first[ring_of]
-    nxt = first[ring_of] + (local + 1) % sizes[ring_of]
-    prv = first[ring_of] + (local - 1) % sizes[ring_of]
-    turn = (u - u[prv]) * (u[nxt] - u) <= 0.0
+    r = field_local if isinstance(field_local, SweepRings) else sweep_rings(field_local)
+    u, v = to_sweep(r.x, r.y, heading_deg)
+    turn = (u - u[r.prv]) * (u[r.nxt] - u) <= 0.0
     cuts = _cuts(u[turn])
     if len(cuts) <= 2:
-        return [(u[: sizes[0]].copy(), v[: sizes[0]].copy())]
-    pieces = _pieces(u, v, turn, cuts, sizes, first, ring_of, local, nxt, prv)
+        return [(u[: r.sizes[0]].copy(), v[: r.sizes[0]].copy())]
+    pieces = _pieces(u, v, turn, cuts, r.sizes, r.first, r.ring_of, r.local, r.nxt, r.prv)
     if pieces is None:
-        return _decompose_clipped(field_local, heading_deg)
+        return _decompose_clipped(r.field, heading_deg)
     return _cells(pieces, cuts)
 
 

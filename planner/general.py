@@ -24,6 +24,7 @@ from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
 from planner.cell_plans import CellPlan, plan_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
+from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
 from planner.fitted_cells import FittedCells, choose_cells, fit_candidate
 from planner.fitted_choice import edge_headings
@@ -223,8 +224,10 @@ def plan_general(
             ranked = list(dict.fromkeys([*ranked, *np.argmin(near, axis=0)[:EDGE_PLANS].tolist()]))
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
+        prepared = [sweep_rings(p) for p in parts]
         cheap = [
-            plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge) for a in ranked
+            plan_heading(prepared, float(headings[a]), d, start_xy, after_lines, edge)
+            for a in ranked
         ]
         if rings:
             cheap = [reach_headland(c, d) for c in cheap]
