@@ -19,7 +19,7 @@ from planner.cell_order import CellVariants, order_cells
 from planner.coverage import Chains, convex_chains, covered_cells
 from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
-from planner.ordering import variant_ends, variant_lengths
+from planner.ordering import aggregate_scan, combine_variants, variant_ends
 from planner.types import Objective
 
 FloatArray = npt.NDArray[np.float64]
@@ -82,8 +82,9 @@ def plan_heading(
         )
         for c, (u_ring, v_ring) in enumerate(rings)
     ]
-    lengths = variant_lengths(scan, None, None)
-    eu, ev, xu, xv = variant_ends(scan)
+    aggregates = aggregate_scan(scan)
+    lengths = combine_variants(aggregates, None, None)
+    eu, ev, xu, xv = variant_ends(scan, aggregates)
     entry = np.stack(from_sweep(eu, ev, heading), axis=2)
     exit_ = np.stack(from_sweep(xu, xv, heading), axis=2)
     variants = CellVariants(entry, exit_, lengths.turns)
