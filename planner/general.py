@@ -64,10 +64,6 @@ EXTRA_PLANS = 1
 EDGE_PLANS = 3
 #: Beyond this many turn-backs (about as many cells) only the best heading is planned in full.
 MANY_TURN_BACKS = 200
-#: Beyond this many vertices the cheap scores are computed on the inner area simplified to
-#: this tolerance [m].
-SCORE_SIMPLIFY_VERTICES = 1_000
-SCORE_SIMPLIFY_M = 0.01
 #: Inner-area parts smaller than this are dropped (slivers between headland passes) [m²].
 _SLIVER_M2 = 1e-6
 
@@ -181,13 +177,7 @@ def plan_general(
     if parts:
         exterior = np.asarray(field_local.exterior.coords)[:-1]
         headings = angles.candidate_headings(exterior, fixed_heading_deg)
-        # A long boundary is scored simplified to a centimetre: the round joins of the machine
-        # area multiply its vertices by ten (a wavy edge: 20,000, and 3 s of scoring), and
-        # the scores are estimates that a centimetre hardly moves.
-        outline = parts
-        if int(shapely.get_num_coordinates(parts).sum()) > SCORE_SIMPLIFY_VERTICES:
-            outline = [shapely.simplify(p, SCORE_SIMPLIFY_M) for p in parts]
-        scores = score_headings(outline, headings, d)
+        scores = score_headings(parts, headings, d)
         affordable = scores.pieces <= angles.MAX_LINES
         if not affordable.any():
             raise PlanTooLargeError(
