@@ -115,11 +115,16 @@ def score_headings(
     rings = [np.asarray(r.coords)[:-1] for p in parts_local for r in (p.exterior, *p.interiors)]
     # A long boundary in blocks of headings: arrays of a few hundred thousand numbers stay in
     # the cache (the wavy field's 20,000 vertices at 360 headings were 60 MB an array).
-    block = max(1, _BLOCK_VALUES // max(sum(len(r) for r in rings), 1))
+    xy = np.concatenate(rings)
+    nxt = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    sizes = [len(r) for r in rings]
+    block = max(1, _BLOCK_VALUES // max(len(xy), 1))
     if len(headings_deg) <= block:
-        return _score_block(rings, headings_deg, float(interval_m), len(parts_local))
+        return _score_block(xy, nxt, sizes, headings_deg, float(interval_m), len(parts_local))
     scores = [
-        _score_block(rings, headings_deg[a : a + block], float(interval_m), len(parts_local))
+        _score_block(
+            xy, nxt, sizes, headings_deg[a : a + block], float(interval_m), len(parts_local)
+        )
         for a in range(0, len(headings_deg), block)
     ]
     return HeadingScores(
@@ -133,11 +138,14 @@ def score_headings(
 
 
 def _score_block(
-    rings: list[FloatArray], headings_deg: FloatArray, d: float, exteriors: int
+    xy: FloatArray,
+    nxt: FloatArray,
+    sizes: list[int],
+    headings_deg: FloatArray,
+    d: float,
+    exteriors: int,
 ) -> HeadingScores:
-    """:func:`score_headings` of the rings' vertices at a block of headings."""
-    xy = np.concatenate(rings)
-    nxt = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    """:func:`score_headings` at a block of headings: every ring's vertices and their next."""
     u1, v1 = to_sweep(xy[:, 0], xy[:, 1], headings_deg[:, None])
     u2, v2 = to_sweep(nxt[:, 0], nxt[:, 1], headings_deg[:, None])
     first = u1.min(axis=1, keepdims=True) + d / 2.0
@@ -162,8 +170,7 @@ def _score_block(
 
     turn_backs = np.zeros(len(headings_deg), dtype=np.int64)
     start = 0
-    for ring in rings:
-        m = len(ring)
+    for m in sizes:
         sign = np.sign(du[:, start : start + m])
         start += m
         # Edges parallel to the lines take the direction of the edge before them.
