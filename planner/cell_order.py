@@ -187,12 +187,13 @@ class _Problem:
         a, b = np.nonzero(~np.eye(n, dtype=bool))
         near = np.abs(a - b) <= _WINDOW
         a, b = a[near], b[near]
-        rest = np.arange(n)
-        moves = []
-        for src, dst in zip(a.tolist(), b.tolist(), strict=True):
-            others = np.delete(rest, src)
-            moves.append(np.insert(others, dst, src))
-        neighbourhood = np.vstack([reversals, np.asarray(moves)])
+        # Position p of the moved order takes src at dst and shifts the cells between by one.
+        p = np.arange(n)[None, :]
+        src, dst = a[:, None], b[:, None]
+        forward = (src < dst) & (p >= src) & (p < dst)
+        backward = (src > dst) & (p > dst) & (p <= src)
+        moves = np.where(p == dst, src, p + forward - backward)
+        neighbourhood = np.vstack([reversals, moves])
         best = float(self.costs(order[None])[0])
         for _ in range(_MAX_ROUNDS):
             candidates = order[neighbourhood]
