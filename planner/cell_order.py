@@ -90,6 +90,8 @@ def order_cells(
     last = np.zeros((m, 4))
     if finish_xy is not None:
         last += np.hypot(*(cells.exit_xy - np.asarray(finish_xy)).transpose(2, 0, 1))
+    if m == 1:  # one cell: its best variant (what the exhaustive search below would find)
+        return [(0, int(np.argmin(first[0] + last[0])))]
     # move[c, w, c2, w2]: from the exit of (c, w) to the entry of (c2, w2). Hundreds of cells
     # (a jagged boundary) would make it gigabytes: straight moves are then computed as needed.
     ex = cells.exit_xy.reshape(m * 4, 2)
@@ -185,12 +187,13 @@ class _Problem:
         a, b = np.nonzero(~np.eye(n, dtype=bool))
         near = np.abs(a - b) <= _WINDOW
         a, b = a[near], b[near]
-        rest = np.arange(n)
-        moves = []
-        for src, dst in zip(a.tolist(), b.tolist(), strict=True):
-            others = np.delete(rest, src)
-            moves.append(np.insert(others, dst, src))
-        neighbourhood = np.vstack([reversals, np.asarray(moves)])
+        # Position p of the moved order takes src at dst and shifts the cells between by one.
+        p = np.arange(n)[None, :]
+        src, dst = a[:, None], b[:, None]
+        forward = (src < dst) & (p >= src) & (p < dst)
+        backward = (src > dst) & (p > dst) & (p <= src)
+        moves = np.where(p == dst, src, p + forward - backward)
+        neighbourhood = np.vstack([reversals, moves])
         best = float(self.costs(order[None])[0])
         for _ in range(_MAX_ROUNDS):
             candidates = order[neighbourhood]

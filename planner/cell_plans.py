@@ -8,7 +8,7 @@ headland passes, its lines reach the headland (:func:`reach_headland`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,10 +16,10 @@ import numpy.typing as npt
 from shapely import Polygon
 
 from planner.cell_order import CellVariants, order_cells
-from planner.coverage import Chains, convex_chains, covered_area
-from planner.decomposition import decompose_sweep
+from planner.coverage import Chains, convex_chains, covered_cells
+from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
-from planner.ordering import variant_ends, variant_lengths
+from planner.ordering import aggregate_scan, combine_variants, variant_ends
 from planner.types import Objective
 
 FloatArray = npt.NDArray[np.float64]
@@ -60,14 +60,17 @@ def better(candidate: CellPlan, best: CellPlan, objective: Objective) -> bool:
 
 
 def plan_heading(
-    parts: list[Polygon],
+    parts: Sequence[Polygon | SweepRings],
     heading: float,
     d: float,
     start_xy: tuple[float, float] | None,
     finish_xy: tuple[float, float] | None,
     edge_m: float,
 ) -> CellPlan:
-    """Decompose, scan and order the cells at one heading; turns and moves straight."""
+    """Decompose, scan and order the cells at one heading; turns and moves straight.
+
+    ``parts`` may be prepared by :func:`planner.decomposition.sweep_rings` (many headings).
+    """
     rings = [ring for part in parts for ring in decompose_sweep(part, heading)]
     scan = scan_cells(rings, d, edge_m=edge_m)
     cells = [
@@ -79,17 +82,17 @@ def plan_heading(
         )
         for c, (u_ring, v_ring) in enumerate(rings)
     ]
-    lengths = variant_lengths(scan, None, None)
-    eu, ev, xu, xv = variant_ends(scan)
+    aggregates = aggregate_scan(scan)
+    lengths = combine_variants(aggregates, None, None)
+    eu, ev, xu, xv = variant_ends(scan, aggregates)
     entry = np.stack(from_sweep(eu, ev, heading), axis=2)
     exit_ = np.stack(from_sweep(xu, xv, heading), axis=2)
     variants = CellVariants(entry, exit_, lengths.turns)
     working = float(lengths.working.sum())
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + order_length(variants, order, start_xy, finish_xy, None)
-    covered = sum(
-        covered_area(c.chains, scan.u[c.lines], scan.v_lo[c.lines], scan.v_hi[c.lines], d)
-        for c in cells
+    covered = covered_cells(
+        [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
     )
     return CellPlan(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
 

@@ -185,6 +185,11 @@ def fitted_length_m(
 CLOSE_SHARE = 0.02
 #: ... at most this many of them (the budget: fitting is most of a plan's time).
 CLOSE_PLANS = 1
+#: A heading estimated this many rule slacks beyond the best coverage may still keep the rule
+#: when fitted (the estimate errs by about a slack) ...
+ESTIMATE_SLACKS = 1.0
+#: ... and is fitted if it is estimated this share shorter than the choice (issue 9's 1 %).
+SHORTER_SHARE = 0.01
 
 
 @functools.lru_cache(maxsize=256)
@@ -239,8 +244,10 @@ def choose_cells(
     choice and every eligible heading within :data:`CLOSE_SHARE` of its estimated length
     are fitted (at most :data:`CLOSE_PLANS` besides it). The estimate is then calibrated
     on the choice (the area its turns really lost, per turn), and every heading that would
-    still cover more than the best fitted one by the rule's slack is fitted too. The
-    rule then picks among the fitted ones (:func:`choose_fitted`).
+    still cover more than the best fitted one by the rule's slack is fitted too, and so is
+    the shortest heading within :data:`ESTIMATE_SLACKS` more of the best estimate that is
+    :data:`SHORTER_SHARE` shorter than the choice. The rule then picks among the fitted
+    ones (:func:`choose_fitted`).
 
     Returns
     -------
@@ -274,4 +281,17 @@ def choose_cells(
         if i not in fitted and cheap[i].covered_m2 - turns[i] * lost > best_fitted + slack_m2
     ]
     fitted.update({i: fit(cheap[i]) for i in rivals})
+    # The estimate's error is about the rule's slack: the shortest heading that it puts up
+    # to one more slack below the best and that would save over 1 % is fitted too.
+    shorter = [
+        i
+        for i in range(len(cheap))
+        if i not in fitted
+        and key(i)[0] <= key(first)[0]
+        and figures[i][0] >= best_m2 - (1.0 + ESTIMATE_SLACKS) * slack_m2
+        and figures[i][1] < figures[first][1] * (1.0 - SHORTER_SHARE)
+    ]
+    if shorter:
+        shortest = min(shorter, key=lambda i: figures[i][1])
+        fitted[shortest] = fit(cheap[shortest])
     return choose_fitted([fitted[i] for i in sorted(fitted, key=key)], objective, slack_m2=slack_m2)

@@ -24,6 +24,7 @@ from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
 from planner.cell_plans import CellPlan, plan_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
+from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
 from planner.fitted_cells import FittedCells, choose_cells, fit_candidate
 from planner.fitted_choice import edge_headings
@@ -213,8 +214,10 @@ def plan_general(
             ranked = list(dict.fromkeys([*ranked, *np.argmin(near, axis=0)[:EDGE_PLANS].tolist()]))
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
+        prepared = [sweep_rings(p) for p in parts]
         cheap = [
-            plan_heading(parts, float(headings[a]), d, start_xy, after_lines, edge) for a in ranked
+            plan_heading(prepared, float(headings[a]), d, start_xy, after_lines, edge)
+            for a in ranked
         ]
         if rings:
             cheap = [reach_headland(c, d) for c in cheap]
@@ -224,6 +227,11 @@ def plan_general(
         slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
 
         def fit(plan: CellPlan) -> FittedCells:
+            # Beyond a few cells the cheap plans order them greedily; a heading fitted is a
+            # candidate for the route, so its order is improved first (as the winner's would
+            # be), and headings are compared on the lengths they will really have.
+            if len(plan.cells) > EXHAUSTIVE_MAX_CELLS:
+                plan = reorder(plan, start_xy, after_lines, None)
             return fit_candidate(
                 plan,
                 field_local=field_local,
@@ -246,7 +254,8 @@ def plan_general(
         # Round holes a straight line is a poor guess of a move between cells: the
         # winner's few cells are reordered with routed moves (many cells cost too much).
         routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
-        best = reorder(best, start_xy, after_lines, router.distances if routed else None)
+        if routed:  # (straight moves: its order was improved before it was fitted)
+            best = reorder(best, start_xy, after_lines, router.distances)
 
     route = RouteBuilder()
     if start_xy is not None:

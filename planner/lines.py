@@ -188,10 +188,12 @@ def scan_cells(
     sizes = np.array([len(u) for u, _ in rings])
     u1 = np.concatenate([u for u, _ in rings])
     v1 = np.concatenate([v for _, v in rings])
-    u2 = np.concatenate([np.roll(u, -1) for u, _ in rings])
-    v2 = np.concatenate([np.roll(v, -1) for _, v in rings])
     cell_of_edge = np.repeat(np.arange(len(rings)), sizes)
     starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    # Each vertex's successor round its own ring.
+    following = np.arange(1, len(u1) + 1)
+    following[starts + sizes - 1] = starts
+    u2, v2 = u1[following], v1[following]
     u_min = np.minimum.reduceat(u1, starts)
     u_max = np.maximum.reduceat(u1, starts)
     edge = d / 2.0 if edge_m is None else float(edge_m)

@@ -293,15 +293,19 @@ def _ends(agg: HeadingAggregates) -> tuple[FloatArray, FloatArray, FloatArray, F
     return entry_u, entry_v, exit_u, exit_v
 
 
-def variant_ends(scan: LineScan) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+def variant_ends(
+    scan: LineScan, aggregates: HeadingAggregates | None = None
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Where each variant enters its first line and leaves its last, shape (A, 4) each.
+
+    ``aggregates`` (:func:`aggregate_scan` of ``scan``) saves computing them again.
 
     Returns
     -------
     entry_u, entry_v, exit_u, exit_v : ndarray, shape (A, 4)
         Sweep-frame coordinates [m], variants in :data:`VARIANTS` order.
     """
-    return _ends(aggregate_scan(scan))
+    return _ends(aggregate_scan(scan) if aggregates is None else aggregates)
 
 
 def ordered_line_ends(

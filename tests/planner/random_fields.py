@@ -10,15 +10,14 @@ from hypothesis import strategies as st
 from shapely import Polygon
 
 
-@st.composite
-def fields_with_holes(
-    draw: st.DrawFn, *, min_vertices: int = 3, max_vertices: int = 40, max_holes: int = 3
-) -> Polygon:
-    """A star-shaped (so simple), usually non-convex polygon of 0.2–20 ha with 0–3 holes."""
-    n = draw(st.integers(min_vertices, max_vertices))
-    seed = draw(st.integers(0, 2**32 - 1))
+def star_field(n: int, seed: int, size_m: float, holes: int) -> Polygon:
+    """A star-shaped (so simple), usually non-convex polygon with up to ``holes`` holes.
+
+    ``n`` vertices at random angles and radii ``size_m`` × 0.35–1 about the origin; each
+    hole a random 3–7-gon, kept where it lies 1 m inside the field and 1 m from the others.
+    Deterministic in its arguments: the property tests draw them, fixed-case tests name them.
+    """
     rng = np.random.default_rng(seed)
-    size_m = 10 ** draw(st.floats(math.log10(50.0), math.log10(500.0)))
     angles = np.sort(rng.uniform(0.0, 2.0 * math.pi, n))
     # Spread the angles so no two vertices coincide and the star stays simple.
     angles = np.unique(np.round(angles, 6))
@@ -29,8 +28,8 @@ def fields_with_holes(
     field = shapely.orient_polygons(Polygon(exterior))
     if not field.is_valid or field.area < 1.0:
         field = shapely.box(-size_m, -size_m / 2, size_m, size_m / 2)
-    holes: list[Polygon] = []
-    for _ in range(draw(st.integers(0, max_holes))):
+    kept: list[Polygon] = []
+    for _ in range(holes):
         k = int(rng.integers(3, 8))
         r = size_m * rng.uniform(0.04, 0.15)
         a = np.sort(rng.uniform(0.0, 2.0 * math.pi, k))
@@ -39,10 +38,21 @@ def fields_with_holes(
         if not hole.is_valid or hole.area < 1.0:
             continue
         room = field.buffer(-1.0)
-        if room.contains(hole) and all(hole.distance(h) > 1.0 for h in holes):
-            holes.append(hole)
-    if holes:
-        field = Polygon(field.exterior, [h.exterior for h in holes])
+        if room.contains(hole) and all(hole.distance(h) > 1.0 for h in kept):
+            kept.append(hole)
+    if kept:
+        field = Polygon(field.exterior, [h.exterior for h in kept])
     field = shapely.orient_polygons(field)
     assert field.is_valid
     return field  # type: ignore[no-any-return]
+
+
+@st.composite
+def fields_with_holes(
+    draw: st.DrawFn, *, min_vertices: int = 3, max_vertices: int = 40, max_holes: int = 3
+) -> Polygon:
+    """A star-shaped (so simple), usually non-convex polygon of 0.2–20 ha with 0–3 holes."""
+    n = draw(st.integers(min_vertices, max_vertices))
+    seed = draw(st.integers(0, 2**32 - 1))
+    size_m = 10 ** draw(st.floats(math.log10(50.0), math.log10(500.0)))
+    return star_field(n, seed, size_m, draw(st.integers(0, max_holes)))

@@ -4,9 +4,11 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from planner.coverage import cell_area, convex_chains, covered_area
-from planner.lines import scan_cell, to_sweep
+from planner.coverage import cell_area, convex_chains, covered_area, covered_cells
+from planner.decomposition import decompose_sweep
+from planner.lines import scan_cell, scan_cells, to_sweep
 from tests.conftest import convex_polygon
+from tests.planner.random_fields import fields_with_holes
 
 
 @settings(max_examples=80, deadline=None)
@@ -44,3 +46,26 @@ def test_a_slanted_end_leaves_a_triangle_untilled() -> None:
     covered = covered_area(chains, np.array([2.0]), np.array([0.0]), np.array([11.0]), 4.0)
     # The footprint misses the triangle above v = 11 on the right, 2 m × 1 m / 2.
     assert covered == pytest.approx(cell_area(chains) - 1.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    field=fields_with_holes(),
+    heading=st.floats(0, 179.999),
+    frac=st.floats(0.005, 0.2),
+    inset=st.sampled_from([0.25, 0.5]),
+)
+def test_covered_cells_equals_each_cell_measured_on_its_own(
+    field: shapely.Polygon, heading: float, frac: float, inset: float
+) -> None:
+    """All cells of a heading in one pass: the sum of :func:`covered_area` per cell."""
+    d = frac * float(np.sqrt(field.area))
+    rings = decompose_sweep(shapely.orient_polygons(field), heading)
+    scan = scan_cells(rings, d, edge_m=inset * d)
+    chains = [convex_chains(u, v) for u, v in rings]
+    one_by_one = sum(
+        covered_area(c, scan.u[a:b], scan.v_lo[a:b], scan.v_hi[a:b], d)
+        for c, a, b in zip(chains, scan.offsets[:-1], scan.offsets[1:], strict=True)
+    )
+    together = covered_cells(chains, scan.offsets, scan.u, scan.v_lo, scan.v_hi, d)
+    assert together == pytest.approx(one_by_one, rel=1e-9, abs=1e-6)

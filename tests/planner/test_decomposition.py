@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely import LineString, Polygon, box
 
-from planner.decomposition import decompose
+from planner.decomposition import _decompose_clipped, decompose, decompose_sweep
 from planner.lines import from_sweep, to_sweep
 from tests.planner.random_fields import fields_with_holes
 
@@ -112,3 +112,18 @@ def test_a_jagged_edge_is_merged_back_into_few_cells() -> None:
     assert_tiles(field, cells)
     # One cell above the teeth, and one per tooth: the slabs between teeth are merged.
     assert len(cells) <= 1 + len(teeth) // 2 + 1
+
+
+@SETTINGS
+@given(field=fields_with_holes(), heading=st.floats(0.0, 179.999))
+def test_monotone_runs_give_the_cells_of_clipping_slabs(field: Polygon, heading: float) -> None:
+    """The numpy decomposition against shapely's slab clipping (the fallback)."""
+    fast = [Polygon(np.stack(r, axis=1)) for r in decompose_sweep(field, heading)]
+    clipped = [Polygon(np.stack(r, axis=1)) for r in _decompose_clipped(field, heading)]
+    # Two critical vertices within the snap of one cut can split a cell when clipping (its
+    # hair between them), never the other way round.
+    assert len(fast) <= len(clipped)
+    if len(fast) == len(clipped):
+        for a, b in zip(fast, clipped, strict=True):
+            assert a.area == pytest.approx(b.area, rel=1e-6, abs=1e-6)
+            assert a.symmetric_difference(b).area <= 1e-5 * max(1.0, b.area)
