@@ -10,12 +10,15 @@ other is kept for later moves; :meth:`FieldRouter.distances` builds the whole gr
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 import shapely
 import shapely.ops
 from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
+from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from shapely import Polygon
 
 from planner.errors import PlannerError
@@ -55,13 +58,26 @@ class FieldRouter:
     def __init__(self, field_local: Polygon) -> None:
         self.field = shapely.orient_polygons(field_local)
         self._grown = self.field.buffer(GRAZE_M, join_style="mitre")
-        shapely.prepare(self._grown)
+        # GEOS locates a point by the edges a horizontal line through it crosses: a comb
+        # whose teeth run along y crosses them all. With |dy| the greater over the edges,
+        # the tests run on x and y swapped (exact: a reflection, no arithmetic).
+        rings = shapely.get_rings(shapely.get_parts(self._grown))
+        edges = np.concatenate(
+            [
+                np.empty((0, 2)),
+                *[np.abs(np.diff(shapely.get_coordinates(r), axis=0)) for r in rings],
+            ]
+        )
+        self._swap = bool(edges[:, 1].sum() > edges[:, 0].sum())
+        self._test = shapely.transform(self._grown, _swap_xy) if self._swap else self._grown
+        shapely.prepare(self._test)
         self._cornered = False
+        self._tree: cKDTree | None = None
         self.nodes = np.empty((0, 2))
         # Unit vectors from each corner to its ring neighbours (the tangency test).
         self._to_prev = np.empty((0, 2))
         self._to_next = np.empty((0, 2))
-        # Whether two tangent corners see each other, by pair key (see _pair_keys), as
+        # Whether two tangent corners see each other, by pair key (lo * n + hi), as
         # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
         self._seen: dict[int, bool] = {}
         self._graph: csr_matrix | None = None
@@ -78,8 +94,10 @@ class FieldRouter:
         -------
         ndarray of bool, shape (k,)
         """
-        segments = shapely.linestrings(np.stack([starts, ends], axis=1))
-        return np.asarray(shapely.contains_properly(self._grown, segments))
+        segments = np.stack([starts, ends], axis=1)
+        if self._swap:
+            segments = segments[..., ::-1]
+        return np.asarray(shapely.contains_properly(self._test, shapely.linestrings(segments)))
 
     def inside_path(self, points: FloatArray) -> bool:
         """Whether the polyline through ``points`` (shape (k, 2), k ≥ 2) stays inside the field.
@@ -87,12 +105,13 @@ class FieldRouter:
         The same answer as :meth:`inside` on its every segment, in one test (a turn's curve
         has hundreds of points).
         """
-        return bool(shapely.contains_properly(self._grown, shapely.linestrings(points)))
+        line = shapely.linestrings(points[:, ::-1] if self._swap else points)
+        return bool(shapely.contains_properly(self._test, line))
 
     def _snap(self, point: FloatArray) -> FloatArray:
         """Return ``point``, or its nearest point of the field if it lies just outside."""
         here = shapely.Point(point)
-        if self._grown.covers(here):
+        if shapely.covers(self._test, shapely.Point(point[::-1] if self._swap else point)):
             return point
         distance = self.field.distance(here)
         if distance > SNAP_M:
@@ -134,13 +153,13 @@ class FieldRouter:
         # a path of length L is shortest once every corner of bound ≤ L is searched: search
         # the corners of least bound alone, doubling their number until no path is found,
         # then once more with every corner of bound ≤ the length found.
-        bound = np.hypot(*(self.nodes - a).T) + np.hypot(*(self.nodes - b).T)
-        order = np.argsort(bound, kind="stable")
-        ranked = bound[order]
+        order, ranked, complete = self._by_bound(a, b, _FIRST_CORNERS)
         count = min(n, _FIRST_CORNERS)
         see_a = np.empty(0, dtype=bool)
         see_b = np.empty(0, dtype=bool)
         while True:
+            if count > len(order):
+                order, ranked, complete = self._by_bound(a, b, count)
             # Ties in: every corner left out has a greater bound than every one searched.
             count = int(np.searchsorted(ranked, ranked[count - 1], side="right"))
             subset = order[:count]
@@ -149,7 +168,10 @@ class FieldRouter:
             see_b = np.concatenate([see_b, self._visible_from(b, subset[len(see_b) :])])
             found = self._subset_path(a, b, subset, see_a, see_b)
             if found is not None:
-                enough = int(np.searchsorted(ranked, found[1] + 1e-9, side="right"))
+                need = found[1] + 1e-9
+                if need >= complete:
+                    order, ranked, complete = self._by_bound(a, b, count, reach=need)
+                enough = int(np.searchsorted(ranked, need, side="right"))
                 if enough <= count:
                     return found[0]
                 count = enough
@@ -157,6 +179,37 @@ class FieldRouter:
                 raise PlannerError("field", "no path inside the field joins two points of the plan")
             else:
                 count = min(n, 2 * count)
+
+    def _by_bound(
+        self, a: FloatArray, b: FloatArray, count: int, *, reach: float = 0.0
+    ) -> tuple[IntArray, FloatArray, float]:
+        """Corners in order of their ellipse bound ``|a − i| + |i − b|``, ties by index.
+
+        Returns the first of them, at least ``count`` (or all), their bounds, and a bound
+        beyond ``reach`` below which none is left out (``inf`` when all are returned).
+        """
+        n = len(self.nodes)
+        if self._tree is None:
+            self._tree = cKDTree(self.nodes)
+        middle = (a + b) / 2.0
+        # |a − i| + |i − b| ≥ 2 |i − middle|: the k corners nearest the middle hold every
+        # corner of bound below twice the k-th distance. Most moves need a few dozen corners
+        # of a field's thousands: no need to rank them all.
+        k = min(n, 4 * count)
+        while k < n // 4:
+            distance, index = self._tree.query(middle, k=k)
+            complete = 2.0 * float(distance[-1]) * (1.0 - 1e-9)
+            if complete > reach:
+                bound = np.hypot(*(self.nodes[index] - a).T) + np.hypot(*(self.nodes[index] - b).T)
+                keep = bound < complete
+                if np.count_nonzero(keep) >= count:
+                    index, bound = index[keep], bound[keep]
+                    order = np.lexsort((index, bound))
+                    return index[order].astype(np.int64), bound[order], complete
+            k *= 4
+        bound = np.hypot(*(self.nodes - a).T) + np.hypot(*(self.nodes - b).T)
+        order = np.argsort(bound, kind="stable")
+        return order, bound[order], math.inf
 
     def _subset_path(
         self,
@@ -336,6 +389,10 @@ class FieldRouter:
         length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
         self._graph = csr_matrix((length, (i, j)), shape=(n, n))
         return self._graph
+
+
+def _swap_xy(xy: FloatArray) -> FloatArray:
+    return xy[:, ::-1]
 
 
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
