@@ -74,9 +74,10 @@ class FieldRouter:
         self._cornered = False
         self._tree: cKDTree | None = None
         self.nodes = np.empty((0, 2))
-        # Unit vectors from each corner to its ring neighbours (the tangency test).
-        self._to_prev = np.empty((0, 2))
-        self._to_next = np.empty((0, 2))
+        # The corners' x and y; the unit vectors from each to its ring neighbours (prev x,
+        # prev y, next x, next y): the tangency test, on rows for fast gathers.
+        self._xy = np.empty((2, 0))
+        self._around = np.empty((4, 0))
         # Whether two tangent corners see each other, by pair key (lo * n + hi), as
         # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
         self._seen: dict[int, bool] = {}
@@ -274,13 +275,20 @@ class FieldRouter:
 
         A shortest path only passes a corner it wraps round, so other pairs need no edge.
         """
-        direction = self.nodes[j] - self.nodes[i]
-        reach = np.hypot(direction[:, 0], direction[:, 1])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            unit = direction / reach[:, None]
-        ok = _wraps(unit, self._to_prev[i], self._to_next[i])
-        ok &= _wraps(unit, self._to_prev[j], self._to_next[j])
-        return np.asarray(ok | (reach == 0.0))
+        x, y = self._xy
+        dx, dy = x[j] - x[i], y[j] - y[i]
+        # A neighbour within 1e-9 rad of the line counts as on it (sines, as distances).
+        tolerance = _COLLINEAR * np.hypot(dx, dy)
+        ok = tolerance == 0.0
+        wraps = ~ok
+        for k in (i, j):
+            prev_x, prev_y, next_x, next_y = self._around[:, k]
+            before = dx * prev_y - dy * prev_x
+            after = dx * next_y - dy * next_x
+            wraps &= (
+                (np.abs(before) < tolerance) | (np.abs(after) < tolerance) | (before * after > 0.0)
+            )
+        return ok | wraps
 
     def _corners(self) -> None:
         if self._cornered:
@@ -300,8 +308,10 @@ class FieldRouter:
         self.nodes = np.concatenate(nodes)
         to_prev = np.concatenate(prev) - self.nodes
         to_next = np.concatenate(nxt) - self.nodes
-        self._to_prev = to_prev / np.hypot(*to_prev.T)[:, None]
-        self._to_next = to_next / np.hypot(*to_next.T)[:, None]
+        to_prev /= np.hypot(*to_prev.T)[:, None]
+        to_next /= np.hypot(*to_next.T)[:, None]
+        self._xy = np.ascontiguousarray(self.nodes.T)
+        self._around = np.ascontiguousarray(np.hstack([to_prev, to_next]).T)
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
         """Return the shortest-path lengths inside the field from every start to every end.
@@ -397,19 +407,6 @@ def _swap_xy(xy: FloatArray) -> FloatArray:
 
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _wraps(unit: FloatArray, to_prev: FloatArray, to_next: FloatArray) -> npt.NDArray[np.bool_]:
-    """Whether the line of direction ``unit`` through a corner has both neighbours on one side.
-
-    ``to_prev``, ``to_next``: unit vectors from the corner to its ring neighbours.
-    """
-    # Sines of the angles; a neighbour within 1e-9 rad of the line counts as on it.
-    s1 = _cross(unit, to_prev)
-    s2 = _cross(unit, to_next)
-    s1 = np.where(np.abs(s1) < _COLLINEAR, 0.0, s1)
-    s2 = np.where(np.abs(s2) < _COLLINEAR, 0.0, s2)
-    return np.asarray(s1 * s2 >= 0.0)
 
 
 def path_length(points: FloatArray) -> float:
