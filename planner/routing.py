@@ -288,7 +288,7 @@ class FieldRouter:
             wraps &= (
                 (np.abs(before) < tolerance) | (np.abs(after) < tolerance) | (before * after > 0.0)
             )
-        return ok | wraps
+        return np.asarray(ok | wraps)
 
     def _corners(self) -> None:
         if self._cornered:
