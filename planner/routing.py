@@ -33,6 +33,8 @@ GRAZE_M = 1e-3
 SNAP_M = 5e-3
 #: Corners whose visibility a query tests first (nearest the straight move by the ellipse).
 _FIRST_CORNERS = 32
+#: Corners up to which pair states are kept in a dense matrix (4 MB), beyond in a dict.
+_DENSE_CORNERS = 2048
 #: Sine below which a corner's neighbour counts as on a line through the corner.
 _COLLINEAR = 1e-9
 
@@ -81,6 +83,10 @@ class FieldRouter:
         # Whether two tangent corners see each other, by pair key (lo * n + hi), as
         # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
         self._seen: dict[int, bool] = {}
+        # Up to _DENSE_CORNERS corners, both tests of every pair met so far in one matrix
+        # instead (-1 not yet, 0 no, 1 tangent and in sight): fields' moves meet the same
+        # pairs again and again.
+        self._states: npt.NDArray[np.int8] | None = None
         self._graph: csr_matrix | None = None
 
     def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
@@ -254,6 +260,18 @@ class FieldRouter:
 
     def _seen_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
         """Whether corners ``i[k]`` and ``j[k]`` are tangent and see each other (cached)."""
+        if self._states is not None:
+            known = self._states[i, j]
+            new = np.nonzero(known < 0)[0]
+            if len(new):
+                i, j = i[new], j[new]
+                state = self._tangent_pairs(i, j).astype(np.int8)
+                tangent = np.nonzero(state)[0]
+                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
+                self._states[i, j] = state
+                self._states[j, i] = state
+                known[new] = state
+            return np.asarray(known == 1)
         ok = self._tangent_pairs(i, j)
         where = np.nonzero(ok)[0]
         if len(where) == 0:
@@ -311,6 +329,8 @@ class FieldRouter:
         to_prev /= np.hypot(*to_prev.T)[:, None]
         to_next /= np.hypot(*to_next.T)[:, None]
         self._xy = np.ascontiguousarray(self.nodes.T)
+        if len(self.nodes) <= _DENSE_CORNERS:
+            self._states = np.full((len(self.nodes), len(self.nodes)), -1, dtype=np.int8)
         self._around = np.ascontiguousarray(np.hstack([to_prev, to_next]).T)
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:

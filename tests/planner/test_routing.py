@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
 from shapely import LineString, Polygon, box
 
+from planner import routing
 from planner.routing import GRAZE_M, FieldRouter, path_length
 from tests.planner.random_fields import fields_with_holes
 
@@ -201,9 +203,14 @@ def test_paths_on_fields_of_many_corners_are_as_short_as_a_plain_visibility_grap
     blocked = ~router.inside(points[i], points[j])
     far = np.argsort(-np.hypot(*(points[i] - points[j]).T) * blocked, kind="stable")[:3]
     queries = [(tuple(points[i[k]]), tuple(points[j[k]])) for k in far]
-    for (a, b), (grazing, exact) in zip(
-        queries, _reference_lengths(area, corners, queries), strict=True
-    ):
-        path = router.path(a, b)
-        assert_inside(area, path)
-        assert grazing - 1e-9 <= path_length(path) <= exact + 1e-9
+    lengths = _reference_lengths(area, corners, queries)
+    # Pair states in a dense matrix (up to 2,048 corners) and in a dict (beyond).
+    for dense in (routing._DENSE_CORNERS, 0):
+        with mock.patch.object(routing, "_DENSE_CORNERS", dense):
+            if not dense:
+                router = FieldRouter(area)
+            for (a, b), (grazing, exact) in zip(queries, lengths, strict=True):
+                path = router.path(a, b)
+                assert_inside(area, path)
+                assert grazing - 1e-9 <= path_length(path) <= exact + 1e-9
+            assert not router._cornered or (router._states is None) == (not dense)
