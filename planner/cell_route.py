@@ -217,6 +217,6 @@ def move_between_cells(
             np.array([yaw1]),
         )
         curve = vehicle_turns(ends, vehicle).curve(0)
-        if len(curve) >= 2 and router.inside(curve[:-1], curve[1:]).all():
+        if len(curve) >= 2 and router.inside_path(curve):
             return curve
     return densify(router.path((float(here[0]), float(here[1])), target), STEP_M)

@@ -3,11 +3,14 @@
 A shortest path inside a polygon bends only at *reflex* corners of the free space: reflex
 vertices of the exterior and convex vertices of the holes. The graph joins every pair of such
 corners that see each other and are tangent there (a path only bends round a corner it wraps);
-all-pairs distances come from Dijkstra (``scipy.sparse.csgraph``). The graph is built once per
-field, on the first move that cannot go straight, and serves every later query.
+lengths come from Dijkstra (``scipy.sparse.csgraph``). A move searches only the corners its
+ellipse bound admits (a few dozen of a field's thousands), and which tangent pairs see each
+other is kept for later moves; :meth:`FieldRouter.distances` builds the whole graph, once.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import numpy.typing as npt
@@ -15,6 +18,7 @@ import shapely
 import shapely.ops
 from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
+from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from shapely import Polygon
 
 from planner.errors import PlannerError
@@ -29,6 +33,8 @@ GRAZE_M = 1e-3
 SNAP_M = 5e-3
 #: Corners whose visibility a query tests first (nearest the straight move by the ellipse).
 _FIRST_CORNERS = 32
+#: Corners up to which pair states are kept in a dense matrix (4 MB), beyond in a dict.
+_DENSE_CORNERS = 2048
 #: Sine below which a corner's neighbour counts as on a line through the corner.
 _COLLINEAR = 1e-9
 
@@ -54,15 +60,34 @@ class FieldRouter:
     def __init__(self, field_local: Polygon) -> None:
         self.field = shapely.orient_polygons(field_local)
         self._grown = self.field.buffer(GRAZE_M, join_style="mitre")
-        shapely.prepare(self._grown)
-        self._built = False
+        # GEOS locates a point by the edges a horizontal line through it crosses: a comb
+        # whose teeth run along y crosses them all. With |dy| the greater over the edges,
+        # the tests run on x and y swapped (exact: a reflection, no arithmetic).
+        rings = shapely.get_rings(shapely.get_parts(self._grown))
+        edges = np.concatenate(
+            [
+                np.empty((0, 2)),
+                *[np.abs(np.diff(shapely.get_coordinates(r), axis=0)) for r in rings],
+            ]
+        )
+        self._swap = bool(edges[:, 1].sum() > edges[:, 0].sum())
+        self._test = shapely.transform(self._grown, _swap_xy) if self._swap else self._grown
+        shapely.prepare(self._test)
         self._cornered = False
-        self._seen = np.empty((0, 0), dtype=np.int8)
+        self._tree: cKDTree | None = None
         self.nodes = np.empty((0, 2))
-        self._prev = np.empty((0, 2))
-        self._next = np.empty((0, 2))
-        self._dist = np.empty((0, 0))
-        self._pred = np.empty((0, 0), dtype=np.int64)
+        # The corners' x and y; the unit vectors from each to its ring neighbours (prev x,
+        # prev y, next x, next y): the tangency test, on rows for fast gathers.
+        self._xy = np.empty((2, 0))
+        self._around = np.empty((4, 0))
+        # Whether two tangent corners see each other, by pair key (lo * n + hi), as
+        # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
+        self._seen: dict[int, bool] = {}
+        # Up to _DENSE_CORNERS corners, both tests of every pair met so far in one matrix
+        # instead (-1 not yet, 0 no, 1 tangent and in sight): fields' moves meet the same
+        # pairs again and again.
+        self._states: npt.NDArray[np.int8] | None = None
+        self._graph: csr_matrix | None = None
 
     def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
         """Whether each straight move ``starts[k] → ends[k]`` stays inside the field.
@@ -76,13 +101,24 @@ class FieldRouter:
         -------
         ndarray of bool, shape (k,)
         """
-        segments = shapely.linestrings(np.stack([starts, ends], axis=1))
-        return np.asarray(shapely.contains_properly(self._grown, segments))
+        segments = np.stack([starts, ends], axis=1)
+        if self._swap:
+            segments = segments[..., ::-1]
+        return np.asarray(shapely.contains_properly(self._test, shapely.linestrings(segments)))
+
+    def inside_path(self, points: FloatArray) -> bool:
+        """Whether the polyline through ``points`` (shape (k, 2), k ≥ 2) stays inside the field.
+
+        The same answer as :meth:`inside` on its every segment, in one test (a turn's curve
+        has hundreds of points).
+        """
+        line = shapely.linestrings(points[:, ::-1] if self._swap else points)
+        return bool(shapely.contains_properly(self._test, line))
 
     def _snap(self, point: FloatArray) -> FloatArray:
         """Return ``point``, or its nearest point of the field if it lies just outside."""
         here = shapely.Point(point)
-        if self._grown.covers(here):
+        if shapely.covers(self._test, shapely.Point(point[::-1] if self._swap else point)):
             return point
         distance = self.field.distance(here)
         if distance > SNAP_M:
@@ -121,35 +157,84 @@ class FieldRouter:
         if n == 0:
             return np.stack([a, b])
         # A path through corner i is at least |a − i| + |i − b| long (the ellipse bound), so
-        # a shortest path no longer than U uses only corners with that bound ≤ U: search the
-        # graph of those corners alone, widening U until the path found is within it.
+        # a path of length L is shortest once every corner of bound ≤ L is searched: search
+        # the corners of least bound alone, doubling their number until no path is found,
+        # then once more with every corner of bound ≤ the length found.
+        order, ranked, complete = self._by_bound(a, b, _FIRST_CORNERS)
+        count = min(n, _FIRST_CORNERS)
+        see_a = np.empty(0, dtype=bool)
+        see_b = np.empty(0, dtype=bool)
+        while True:
+            if count > len(order):
+                order, ranked, complete = self._by_bound(a, b, count)
+            # Ties in: every corner left out has a greater bound than every one searched.
+            count = int(np.searchsorted(ranked, ranked[count - 1], side="right"))
+            subset = order[:count]
+            # The subsets grow by their far end: see the new corners only.
+            see_a = np.concatenate([see_a, self._visible_from(a, subset[len(see_a) :])])
+            see_b = np.concatenate([see_b, self._visible_from(b, subset[len(see_b) :])])
+            found = self._subset_path(a, b, subset, see_a, see_b)
+            if found is not None:
+                need = found[1] + 1e-9
+                if need >= complete:
+                    order, ranked, complete = self._by_bound(a, b, count, reach=need)
+                enough = int(np.searchsorted(ranked, need, side="right"))
+                if enough <= count:
+                    return found[0]
+                count = enough
+            elif count == n:
+                raise PlannerError("field", "no path inside the field joins two points of the plan")
+            else:
+                count = min(n, 2 * count)
+
+    def _by_bound(
+        self, a: FloatArray, b: FloatArray, count: int, *, reach: float = 0.0
+    ) -> tuple[IntArray, FloatArray, float]:
+        """Corners in order of their ellipse bound ``|a − i| + |i − b|``, ties by index.
+
+        Returns the first of them, at least ``count`` (or all), their bounds, and a bound
+        beyond ``reach`` below which none is left out (``inf`` when all are returned).
+        """
+        n = len(self.nodes)
+        if self._tree is None:
+            self._tree = cKDTree(self.nodes)
+        middle = (a + b) / 2.0
+        # |a − i| + |i − b| ≥ 2 |i − middle|: the k corners nearest the middle hold every
+        # corner of bound below twice the k-th distance. Most moves need a few dozen corners
+        # of a field's thousands: no need to rank them all.
+        k = min(n, 4 * count)
+        while k < n // 4:
+            distance, index = self._tree.query(middle, k=k)
+            complete = 2.0 * float(distance[-1]) * (1.0 - 1e-9)
+            if complete > reach:
+                bound = np.hypot(*(self.nodes[index] - a).T) + np.hypot(*(self.nodes[index] - b).T)
+                keep = bound < complete
+                if np.count_nonzero(keep) >= count:
+                    index, bound = index[keep], bound[keep]
+                    order = np.lexsort((index, bound))
+                    return index[order].astype(np.int64), bound[order], complete
+            k *= 4
         bound = np.hypot(*(self.nodes - a).T) + np.hypot(*(self.nodes - b).T)
         order = np.argsort(bound, kind="stable")
-        limit = float(bound[order[min(n, _FIRST_CORNERS) - 1]])
-        while True:
-            subset = order[: int(np.searchsorted(bound[order], limit, side="right"))]
-            found = self._subset_path(a, b, subset)
-            if found is not None and found[1] <= limit + 1e-9:
-                return found[0]
-            if len(subset) == n:
-                if found is None:
-                    raise PlannerError(
-                        "field", "no path inside the field joins two points of the plan"
-                    )
-                return found[0]
-            limit = max(2.0 * limit, found[1] if found is not None else 0.0)
+        return order, bound[order], math.inf
 
     def _subset_path(
-        self, a: FloatArray, b: FloatArray, subset: IntArray
+        self,
+        a: FloatArray,
+        b: FloatArray,
+        subset: IntArray,
+        see_a: npt.NDArray[np.bool_],
+        see_b: npt.NDArray[np.bool_],
     ) -> tuple[FloatArray, float] | None:
-        """Shortest path from ``a`` to ``b`` through the corners ``subset`` only."""
+        """Shortest path from ``a`` to ``b`` through the corners ``subset`` only.
+
+        ``see_a[k]``, ``see_b[k]``: whether ``a``, ``b`` see corner ``subset[k]``.
+        """
         s = len(subset)
-        self._see_pairs(subset)
-        sub = self._seen[np.ix_(subset, subset)] == 1
-        i, j = np.nonzero(np.triu(sub, k=1))
+        i, j = np.triu_indices(s, k=1)
+        keep = self._seen_pairs(subset[i], subset[j])
+        i, j = i[keep], j[keep]
         length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
-        see_a = self._visible_from(a, subset)
-        see_b = self._visible_from(b, subset)
         # Nodes 0 … s-1 the corners, s the start, s+1 the end.
         ia, ib = np.nonzero(see_a)[0], np.nonzero(see_b)[0]
         rows = np.concatenate([i, np.full(len(ia), s), ib])
@@ -173,23 +258,55 @@ class FieldRouter:
         corners = subset[np.asarray(chain[:-1][::-1], dtype=np.int64)]
         return np.vstack([a, self.nodes[corners], b]), float(dist[s + 1])
 
-    def _see_pairs(self, subset: IntArray) -> None:
-        """Fill in which pairs of ``subset`` see each other (tangent and inside), once each."""
-        sub = np.sort(subset)
-        known = self._seen[np.ix_(sub, sub)]
-        i, j = np.nonzero(np.triu(known < 0, k=1))
-        if len(i) == 0:
-            return
-        i, j = sub[i], sub[j]
-        a, b = self.nodes[i], self.nodes[j]
-        ok = _tangent(b, a, self._prev[i], self._next[i]) & _tangent(
-            a, b, self._prev[j], self._next[j]
-        )
-        result = np.zeros(len(i), dtype=np.int8)
-        if ok.any():
-            result[ok] = self.inside(a[ok], b[ok]).astype(np.int8)
-        self._seen[i, j] = result
-        self._seen[j, i] = result
+    def _seen_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
+        """Whether corners ``i[k]`` and ``j[k]`` are tangent and see each other (cached)."""
+        if self._states is not None:
+            known = self._states[i, j]
+            new = np.nonzero(known < 0)[0]
+            if len(new):
+                i, j = i[new], j[new]
+                state = self._tangent_pairs(i, j).astype(np.int8)
+                tangent = np.nonzero(state)[0]
+                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
+                self._states[i, j] = state
+                self._states[j, i] = state
+                known[new] = state
+            return np.asarray(known == 1)
+        ok = self._tangent_pairs(i, j)
+        where = np.nonzero(ok)[0]
+        if len(where) == 0:
+            return ok
+        lo, hi = np.minimum(i[where], j[where]), np.maximum(i[where], j[where])
+        keys = (lo * len(self.nodes) + hi).tolist()
+        seen = self._seen
+        known = np.fromiter((seen.get(k, 2) for k in keys), dtype=np.int8, count=len(keys))
+        new = np.nonzero(known == 2)[0]
+        if len(new):
+            fresh = self.inside(self.nodes[lo[new]], self.nodes[hi[new]])
+            known[new] = fresh
+            seen.update(zip([keys[k] for k in new.tolist()], fresh.tolist(), strict=True))
+        ok[where] = known == 1
+        return ok
+
+    def _tangent_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
+        """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both.
+
+        A shortest path only passes a corner it wraps round, so other pairs need no edge.
+        """
+        x, y = self._xy
+        dx, dy = x[j] - x[i], y[j] - y[i]
+        # A neighbour within 1e-9 rad of the line counts as on it (sines, as distances).
+        tolerance = _COLLINEAR * np.hypot(dx, dy)
+        ok = tolerance == 0.0
+        wraps = ~ok
+        for k in (i, j):
+            prev_x, prev_y, next_x, next_y = self._around[:, k]
+            before = dx * prev_y - dy * prev_x
+            after = dx * next_y - dy * next_x
+            wraps &= (
+                (np.abs(before) < tolerance) | (np.abs(after) < tolerance) | (before * after > 0.0)
+            )
+        return np.asarray(ok | wraps)
 
     def _corners(self) -> None:
         if self._cornered:
@@ -207,10 +324,14 @@ class FieldRouter:
             prev.append(before[reflex])
             nxt.append(after[reflex])
         self.nodes = np.concatenate(nodes)
-        self._prev = np.concatenate(prev)
-        self._next = np.concatenate(nxt)
-        n = len(self.nodes)
-        self._seen = np.full((n, n), -1, dtype=np.int8)  # -1 unknown, 0 blocked, 1 seen
+        to_prev = np.concatenate(prev) - self.nodes
+        to_next = np.concatenate(nxt) - self.nodes
+        to_prev /= np.hypot(*to_prev.T)[:, None]
+        to_next /= np.hypot(*to_next.T)[:, None]
+        self._xy = np.ascontiguousarray(self.nodes.T)
+        if len(self.nodes) <= _DENSE_CORNERS:
+            self._states = np.full((len(self.nodes), len(self.nodes)), -1, dtype=np.int8)
+        self._around = np.ascontiguousarray(np.hstack([to_prev, to_next]).T)
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
         """Return the shortest-path lengths inside the field from every start to every end.
@@ -240,21 +361,35 @@ class FieldRouter:
         seen = self.inside(a, b).reshape(p, q)
         if seen.all():
             return straight
-        self._build()
+        corners = self._corner_graph()
         n = len(self.nodes)
         if n == 0:
             unreachable: FloatArray = np.where(seen, straight, np.inf)
             return unreachable
-        node_seen_a = self.inside(np.repeat(starts, n, axis=0), np.tile(self.nodes, (p, 1)))
-        node_seen_b = self.inside(np.repeat(ends, n, axis=0), np.tile(self.nodes, (q, 1)))
-        to_node = np.hypot(*(np.repeat(starts, n, axis=0) - np.tile(self.nodes, (p, 1))).T)
-        from_node = np.hypot(*(np.repeat(ends, n, axis=0) - np.tile(self.nodes, (q, 1))).T)
-        leg_a = np.where(node_seen_a, to_node, np.inf).reshape(p, n)
-        leg_b = np.where(node_seen_b, from_node, np.inf).reshape(q, n)
-        # Min-plus products: start → node i → (graph) → node j → end.
-        via = (leg_a[:, :, None] + self._dist[None, :, :]).min(axis=1)  # (p, n)
-        around = (via[:, None, :] + leg_b[None, :, :]).min(axis=2)  # (p, q)
-        lengths: FloatArray = np.where(seen, straight, around)
+        # Nodes 0 … n-1 the corners, then the starts, then the ends; a start joins the
+        # corners and ends it sees, an end the corners it sees.
+        pairs = [
+            (np.repeat(np.arange(p), n), np.tile(np.arange(n), p), starts, n),
+            (np.repeat(np.arange(q), n), np.tile(np.arange(n), q), ends, n + p),
+        ]
+        edges = corners.tocoo()
+        rows, cols, weights = [edges.row], [edges.col], [edges.data]
+        for point, corner, xy, first in pairs:
+            visible = self.inside(xy[point], self.nodes[corner])
+            rows.append(first + point[visible])
+            cols.append(corner[visible])
+            weights.append(np.hypot(*(xy[point[visible]] - self.nodes[corner[visible]]).T))
+        direct_start, direct_end = np.nonzero(seen)
+        rows.append(n + direct_start)
+        cols.append(n + p + direct_end)
+        weights.append(straight[direct_start, direct_end])
+        size = n + p + q
+        graph = csr_matrix(
+            (np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(size, size),
+        )
+        dist = shortest_path(graph, method="D", directed=False, indices=np.arange(n, n + p))
+        lengths: FloatArray = np.where(seen, straight, dist[:, n + p :])
         return lengths
 
     def _visible_from(self, p: FloatArray, which: IntArray) -> npt.NDArray[np.bool_]:
@@ -262,46 +397,36 @@ class FieldRouter:
         # fail it against that edge's own corner.
         return self.inside(np.repeat(p[None], len(which), axis=0), self.nodes[which])
 
-    def _build(self) -> None:
-        """All-pairs distances between the corners (for :meth:`distances`)."""
-        if self._built:
-            return
-        self._built = True
+    def _corner_graph(self) -> csr_matrix:
+        """Every pair of corners tangent and in sight, once per field (for :meth:`distances`)."""
+        if self._graph is not None:
+            return self._graph
         self._corners()
         n = len(self.nodes)
-        if n == 0:
-            return
-        everything = np.arange(n)
-        self._see_pairs(everything)
-        i, j = np.nonzero(np.triu(self._seen == 1, k=1))
+        rows, cols = [np.empty(0, dtype=np.int64)], [np.empty(0, dtype=np.int64)]
+        # Rows in blocks of about a million pairs: memory stays small on big fields. Not
+        # through the query cache: every pair is met once here.
+        step = max(1, 1_000_000 // max(n, 1))
+        for first in range(0, n, step):
+            i, j = np.nonzero(np.arange(first, min(n, first + step))[:, None] < np.arange(n))
+            i += first
+            tangent = self._tangent_pairs(i, j)
+            i, j = i[tangent], j[tangent]
+            visible = self.inside(self.nodes[i], self.nodes[j])
+            rows.append(i[visible])
+            cols.append(j[visible])
+        i, j = np.concatenate(rows), np.concatenate(cols)
         length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
-        graph = csr_matrix((length, (i, j)), shape=(n, n))
-        dist, pred = shortest_path(graph, method="D", directed=False, return_predecessors=True)
-        self._dist = dist
-        self._pred = pred.astype(np.int64)
+        self._graph = csr_matrix((length, (i, j)), shape=(n, n))
+        return self._graph
+
+
+def _swap_xy(xy: FloatArray) -> FloatArray:
+    return xy[:, ::-1]
 
 
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _tangent(
-    p: FloatArray, corner: FloatArray, before: FloatArray, after: FloatArray
-) -> npt.NDArray[np.bool_]:
-    """Whether the line from ``p`` through ``corner`` has both ring neighbours on one side.
-
-    A shortest path only passes a corner it wraps round, so other corners need no edge.
-    """
-    direction = corner - p
-    to_before, to_after = before - corner, after - corner
-    reach = np.hypot(direction[..., 0], direction[..., 1])
-    # Sines of the angles; a neighbour within 1e-9 rad of the line counts as on it.
-    s1 = _cross(direction, to_before) / (reach * np.hypot(to_before[..., 0], to_before[..., 1]))
-    s2 = _cross(direction, to_after) / (reach * np.hypot(to_after[..., 0], to_after[..., 1]))
-    s1 = np.where(np.abs(s1) < _COLLINEAR, 0.0, s1)
-    s2 = np.where(np.abs(s2) < _COLLINEAR, 0.0, s2)
-    with np.errstate(invalid="ignore"):
-        return np.asarray((s1 * s2 >= 0.0) | (reach == 0.0))
 
 
 def path_length(points: FloatArray) -> float:

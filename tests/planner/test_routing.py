@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import math
+from unittest import mock
 
 import numpy as np
 import pytest
 import shapely
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
+from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
 from shapely import LineString, Polygon, box
 
-from planner.routing import FieldRouter, path_length
+from planner import routing
+from planner.routing import GRAZE_M, FieldRouter, path_length
 from tests.planner.random_fields import fields_with_holes
 
 TOLERANCE_M = 0.01
@@ -98,3 +102,115 @@ def test_distance_matrix_equals_the_lengths_of_the_paths(field: Polygon, seed: i
         for j, b in enumerate(ends):
             expected = path_length(router.path(tuple(a), tuple(b)))
             assert matrix[i, j] == pytest.approx(expected, abs=1e-6)
+
+
+def _reference_lengths(
+    field: Polygon, nodes: np.ndarray, queries: list[tuple[tuple[float, float], ...]]
+) -> list[tuple[float, float]]:
+    """Shortest a → b by the plain visibility graph on ``nodes``: every pair tested, Dijkstra.
+
+    For each query ``(a, b)``, the length with moves allowed to graze the boundary by
+    ``GRAZE_M`` (no path the router may take is shorter) and the length with moves held to
+    the field exactly (the router's, grazing allowed, is no longer).
+    """
+    grown = field.buffer(GRAZE_M, join_style="mitre")
+    exact = shapely.from_wkb(shapely.to_wkb(field))  # a copy, to prepare
+    shapely.prepare([grown, exact])
+
+    def seen(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        segments = shapely.linestrings(np.stack([starts, ends], axis=1))
+        grazing = shapely.contains_properly(grown, segments)
+        held = grazing.copy()  # a move held to the field grazes it by nothing
+        held[grazing] = shapely.covers(exact, segments[grazing])
+        return grazing, held
+
+    i, j = np.triu_indices(len(nodes), k=1)
+    between = seen(nodes[i], nodes[j])
+    k = np.arange(len(nodes))
+    out = []
+    for a, b in queries:
+        ends = np.asarray([a, b])
+        legs = seen(np.repeat(ends, len(nodes), axis=0), np.tile(nodes, (2, 1)))
+        straight = seen(ends[:1], ends[1:])
+        lengths = []
+        for mask, leg, direct in zip(between, legs, straight, strict=True):
+            # Nodes 0 … n-1 the corners, n the start, n+1 the end.
+            rows = np.concatenate([i[mask], np.repeat([len(nodes), len(nodes) + 1], len(nodes))])
+            cols = np.concatenate([j[mask], k, k])
+            keep = np.concatenate([np.ones(int(mask.sum()), dtype=bool), leg])
+            rows, cols = np.append(rows[keep], len(nodes)), np.append(cols[keep], len(nodes) + 1)
+            points = np.vstack([nodes, ends])
+            weight = np.hypot(*(points[rows] - points[cols]).T)
+            weight[-1] = weight[-1] if direct[0] else np.inf
+            graph = csr_matrix((weight, (rows, cols)), shape=(len(points), len(points)))
+            lengths.append(float(shortest_path(graph, directed=False, indices=len(nodes))[-1]))
+        out.append((lengths[0], lengths[1]))
+    return out
+
+
+def _reflex_corners(field: Polygon) -> np.ndarray:
+    """Corners a shortest path can bend at: reflex on the exterior, convex on the holes."""
+    field = shapely.orient_polygons(field)
+    corners = []
+    for ring in (field.exterior, *field.interiors):
+        xy = np.asarray(ring.coords)[:-1]
+        before, after = np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0)
+        turn = (xy - before)[:, 0] * (after - xy)[:, 1] - (xy - before)[:, 1] * (after - xy)[:, 0]
+        corners.append(xy[turn < 0.0])
+    return np.concatenate(corners)
+
+
+@SETTINGS
+@given(field=fields_with_holes(), seed=st.integers(0, 2**32 - 1))
+def test_paths_are_as_short_as_a_plain_visibility_graph_over_every_vertex(
+    field: Polygon, seed: int
+) -> None:
+    """No corner pruned (tangency, ellipse bound) that a shortest path needs."""
+    rng = np.random.default_rng(seed)
+    router = FieldRouter(field)
+    vertices = np.concatenate(
+        [np.asarray(r.coords)[:-1] for r in (field.exterior, *field.interiors)]
+    )
+    queries = list(zip(*[iter(_points_inside(field, rng, 6))] * 2, strict=True))
+    for (a, b), (grazing, exact) in zip(
+        queries, _reference_lengths(field, vertices, queries), strict=True
+    ):
+        assert grazing - 1e-9 <= path_length(router.path(a, b)) <= exact + 1e-9
+
+
+@settings(SETTINGS, max_examples=8)
+@given(field=fields_with_holes(max_holes=3), seed=st.integers(0, 2**32 - 1))
+def test_paths_on_fields_of_many_corners_are_as_short_as_a_plain_visibility_graph(
+    field: Polygon, seed: int
+) -> None:
+    """A machine area's rounded corners: so many that a move ranks only those near it."""
+
+    def rounded(quad_segs: int) -> Polygon:
+        area = field.buffer(-0.5, quad_segs=quad_segs)
+        return max(shapely.get_parts(area), key=lambda p: p.area)  # type: ignore[no-any-return]
+
+    # About 600 corners: FieldRouter ranks them by a k-d tree past 4 * 4 * 32.
+    few = len(_reflex_corners(rounded(16)))
+    assume(few > 0)
+    area = rounded(min(512, math.ceil(16 * 600 / few)))
+    corners = _reflex_corners(area)
+    assume(520 < len(corners) < 800)
+    rng = np.random.default_rng(seed)
+    router = FieldRouter(area)
+    # Moves that cannot go straight, the longest first: those search far beyond their ends.
+    points = np.asarray(_points_inside(area, rng, 30))
+    i, j = np.triu_indices(len(points), k=1)
+    blocked = ~router.inside(points[i], points[j])
+    far = np.argsort(-np.hypot(*(points[i] - points[j]).T) * blocked, kind="stable")[:3]
+    queries = [(tuple(points[i[k]]), tuple(points[j[k]])) for k in far]
+    lengths = _reference_lengths(area, corners, queries)
+    # Pair states in a dense matrix (up to 2,048 corners) and in a dict (beyond).
+    for dense in (routing._DENSE_CORNERS, 0):
+        with mock.patch.object(routing, "_DENSE_CORNERS", dense):
+            if not dense:
+                router = FieldRouter(area)
+            for (a, b), (grazing, exact) in zip(queries, lengths, strict=True):
+                path = router.path(a, b)
+                assert_inside(area, path)
+                assert grazing - 1e-9 <= path_length(path) <= exact + 1e-9
+            assert not router._cornered or (router._states is None) == (not dense)
