@@ -158,6 +158,12 @@ class HeadingChoice:
         Other (heading, variant) pairs worth planning in full when the scorer's coverage is
         not the plan's (a vehicle's pulled-back line ends): the best-covering scored
         headings, at least :data:`_SEED_GAP_DEG` apart, best first.
+    line_count : int
+        Lines at the chosen heading (0 if not known).
+    alternative_line_counts : tuple of int
+        Lines at each alternative.
+    alternative_coverage : tuple of float
+        Each alternative's coverage, as the scorer gave it.
     """
 
     heading_deg: float
@@ -165,6 +171,9 @@ class HeadingChoice:
     coverage_ratio: float
     coverage_given_up_pp: float
     alternatives: tuple[tuple[float, int], ...] = ()
+    line_count: int = 0
+    alternative_line_counts: tuple[int, ...] = ()
+    alternative_coverage: tuple[float, ...] = ()
 
 
 def coverage_eligible(coverage: FloatArray) -> npt.NDArray[np.bool_]:
@@ -276,13 +285,23 @@ def search_headings(
             if not moved:
                 break
             centres = np.array([chosen[0]])  # re-centre on a refined winner
-        alternatives = _best_covering(pool, objective, chosen[0])
     else:
-        alternatives = _best_covering(
-            _Pool(headings, lengths, counts, coverage), objective, chosen[0]
-        )
+        pool = _Pool(headings, lengths, counts, coverage)
+    alternatives = _best_covering(pool, objective, chosen[0])
     given_up = max(best_coverage - chosen[2], 0.0) * 100.0
-    return HeadingChoice(chosen[0], chosen[1], chosen[2], given_up, alternatives)
+    at = [pool.index(h) for h, _ in alternatives]
+    alternative_counts = tuple(int(pool.counts[i]) for i in at)
+    alternative_coverage = tuple(float(pool.coverage[i]) for i in at)
+    return HeadingChoice(
+        chosen[0],
+        chosen[1],
+        chosen[2],
+        given_up,
+        alternatives,
+        int(pool.counts[pool.index(chosen[0])]),
+        alternative_counts,
+        alternative_coverage,
+    )
 
 
 #: Alternatives :func:`search_headings` offers for a re-check with the plan's own coverage.
@@ -297,16 +316,32 @@ def _best_covering(
         (pool.counts <= MAX_LINES) & np.isfinite(pool.coverage), pool.coverage, -np.inf
     )
     total = np.round(pool.lengths.total / _TIE_M) * _TIE_M
-    picked: list[int] = []
-    for i in np.lexsort(
+    order = np.lexsort(
         (pool.headings, _objective_key(pool.lengths, pool.counts, objective), -coverage)
-    ).tolist():
-        if not np.isfinite(coverage[i]) or len(picked) == ALTERNATIVES:
-            break
-        gap = np.abs((pool.headings[picked] - pool.headings[i] + 90.0) % 180.0 - 90.0)
-        if not picked or gap.min() >= _SEED_GAP_DEG:
-            picked.append(i)
+    )
+    picked = _spread(order, pool.headings, np.isfinite(coverage), ALTERNATIVES)
     return tuple((float(pool.headings[i]), int(np.argmin(total[i]))) for i in picked)
+
+
+def _spread(
+    order: IntArray, headings: FloatArray, usable: npt.NDArray[np.bool_], k: int
+) -> list[int]:
+    """Return the first ``k`` usable indices of ``order``, each a seed gap from those before.
+
+    Plain floats: there are hundreds of candidates but only a few picks.
+    """
+    picked: list[int] = []
+    taken: list[float] = []
+    heading_of = headings.tolist()
+    ok = usable.tolist()
+    for i in order.tolist():
+        if not ok[i] or len(picked) == k:
+            break
+        h = heading_of[i]
+        if all(abs((t - h + 90.0) % 180.0 - 90.0) >= _SEED_GAP_DEG for t in taken):
+            picked.append(i)
+            taken.append(h)
+    return picked
 
 
 @dataclass(frozen=True, slots=True)
@@ -355,11 +390,5 @@ def _seeds(
 ) -> IntArray:
     """Return the best ``k`` eligible headings by the objective, a seed gap apart."""
     key = np.where(eligible, _objective_key(lengths, counts, objective), np.inf)
-    picked: list[int] = []
-    for i in np.lexsort((headings, key)).tolist():
-        if not np.isfinite(key[i]) or len(picked) == k:
-            break
-        gap = np.abs((headings[picked] - headings[i] + 90.0) % 180.0 - 90.0)
-        if not picked or gap.min() >= _SEED_GAP_DEG:
-            picked.append(i)
+    picked = _spread(np.lexsort((headings, key)), headings, np.isfinite(key), k)
     return np.asarray(picked, dtype=np.int64)
