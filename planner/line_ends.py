@@ -82,6 +82,7 @@ def fit_lines(
     *,
     machine: Chains,
     vehicle: Vehicle,
+    planned: TurnCurves | None = None,
 ) -> FittedLines:
     """Pull line ends back until every turn between consecutive lines fits the machine area.
 
@@ -96,6 +97,9 @@ def fit_lines(
         The machine area of the cell (the field eroded by half the vehicle's width), convex
         or sweep-monotone, in the same sweep frame.
     vehicle : Vehicle
+    planned : TurnCurves, optional
+        The ``n - 1`` turns between consecutive lines as given, if planned already (many
+        cells at once: :func:`planner.cell_route.fit_cells`).
 
     Returns
     -------
@@ -121,7 +125,7 @@ def fit_lines(
     # A turn depends only on the two line ends it joins, as given (the pull-back is its own
     # output), so a refit round reuses every turn whose pair of lines is still adjacent and
     # plans only the turns of the pairs that dropping a line made.
-    turns = _TurnStore(u, v_start, v_end, up, machine, vehicle)
+    turns = _TurnStore(u, v_start, v_end, up, machine, vehicle, planned)
     for round_ in range(_MAX_ROUNDS):
         k = np.nonzero(keep)[0]
         fit, drop = _fit_once(k, u, v_start, v_end, up, index, turns, machine)
@@ -192,8 +196,10 @@ class _TurnStore:
         up: BoolArray,
         machine: Chains,
         vehicle: Vehicle,
+        planned: TurnCurves | None = None,
     ) -> None:
         self._u, self._a, self._b, self._up = u, a, b, up
+        self._planned = planned  # the turns of the first round, if given
         self._machine, self._vehicle = machine, vehicle
         self._n = len(u)
         self._slot: dict[int, int] = {}
@@ -209,9 +215,12 @@ class _TurnStore:
         new = [i for i, key in enumerate(keys) if key not in slot]
         if new:
             pick = np.asarray(new, dtype=np.int64)
+            planned = None
+            if self._planned is not None and not slot and len(new) == self._n - 1:
+                planned = self._planned  # the first round: every line and its next
             curves, shift, fits = _fit_turns(
                 first[pick], second[pick], self._u, self._a, self._b, self._up,
-                self._machine, self._vehicle,
+                self._machine, self._vehicle, planned,
             )  # fmt: skip
             base = len(self.shift)
             for j, i in enumerate(new):
@@ -238,8 +247,11 @@ def _fit_turns(
     up: BoolArray,
     machine: Chains,
     vehicle: Vehicle,
+    planned: TurnCurves | None = None,
 ) -> tuple[TurnCurves, FloatArray, BoolArray]:
     """Plan and fit the turns from the end of each line ``first`` to the start of ``second``.
+
+    ``planned``: those turns, if they are planned already.
 
     Returns
     -------
@@ -250,9 +262,12 @@ def _fit_turns(
     fits : ndarray of bool
         Whether it fits the machine area at all.
     """
-    yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
-    ends = TurnEnds(u[first], b[first], yaw[first], u[second], a[second], yaw[second])
-    curves = vehicle_turns(ends, vehicle)
+    if planned is None:
+        yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
+        ends = TurnEnds(u[first], b[first], yaw[first], u[second], a[second], yaw[second])
+        curves = vehicle_turns(ends, vehicle)
+    else:
+        curves = planned
     owner = np.repeat(np.arange(len(first)), np.diff(curves.offsets))
     top = up[first]
     pu, pv = curves.xy[:, 0], curves.xy[:, 1]
@@ -302,32 +317,26 @@ def _chain_vertices_under(
     ua, ub, va, vb = pu[i], pu[i + 1], pv[i], pv[i + 1]
     turn = owner[i]
     at_top = top[turn]
-    turns_out: list[IntArray] = []
-    needs: list[FloatArray] = []
-    for chain_top, cu, cv in (
-        (True, machine.hi_u, machine.hi_v),
-        (False, machine.lo_u, machine.lo_v),
-    ):
-        pick = at_top == chain_top
-        lo_u, hi_u = np.minimum(ua[pick], ub[pick]), np.maximum(ua[pick], ub[pick])
-        first = np.searchsorted(cu, lo_u, side="right")
-        stop = np.searchsorted(cu, hi_u, side="left")
-        count = np.maximum(stop - first, 0)
-        if not count.any():
-            continue
-        step = np.repeat(np.arange(len(count)), count)
-        vertex = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-        vertex += first[step]
-        a_u, b_u = ua[pick][step], ub[pick][step]
-        a_v, b_v = va[pick][step], vb[pick][step]
-        t = (cu[vertex] - a_u) / np.where(b_u != a_u, b_u - a_u, 1.0)
-        curve_v = a_v + t * (b_v - a_v)
-        gap = curve_v - cv[vertex] if chain_top else cv[vertex] - curve_v
-        turns_out.append(turn[pick][step])
-        needs.append(gap)
-    if not needs:
+    # Both chains in one sorted array: the lower chain's vertices shifted past every curve.
+    shift = 4.0 * (float(np.abs(pu).max(initial=0.0)) + abs(machine.u_max) + abs(machine.u_min))
+    shift += 1.0
+    cu = np.concatenate([machine.hi_u, machine.lo_u + shift])
+    cv = np.concatenate([machine.hi_v, machine.lo_v])
+    offset = np.where(at_top, 0.0, shift)
+    lo_u, hi_u = np.minimum(ua, ub) + offset, np.maximum(ua, ub) + offset
+    first = np.searchsorted(cu, lo_u, side="right")
+    stop = np.searchsorted(cu, hi_u, side="left")
+    count = np.maximum(stop - first, 0)
+    total = int(count.sum())
+    if total == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0)
-    return np.concatenate(turns_out), np.concatenate(needs)
+    step = np.repeat(np.arange(len(count)), count)
+    vertex = np.arange(total) - np.repeat(np.cumsum(count) - count, count) + first[step]
+    a_u, b_u = ua[step] + offset[step], ub[step] + offset[step]
+    t = (cu[vertex] - a_u) / np.where(b_u != a_u, b_u - a_u, 1.0)
+    curve_v = va[step] + t * (vb[step] - va[step])
+    gap = np.where(at_top[step], curve_v - cv[vertex], cv[vertex] - curve_v)
+    return turn[step], gap
 
 
 def machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon | MultiPolygon:

@@ -457,8 +457,14 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     n = len(ends)
     if n >= _SHAPES_FROM:
         dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
-        keys = np.round(np.stack([dx, dy, ends.yaw0, ends.yaw1], axis=1) / SAME_SHAPE)
-        _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        keys = np.round(np.stack([dx, dy, ends.yaw0, ends.yaw1]) / SAME_SHAPE)
+        # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
+        order = np.lexsort(keys[::-1])
+        fresh = np.ones(n, dtype=bool)
+        fresh[1:] = (np.diff(keys[:, order], axis=1) != 0.0).any(axis=0)
+        first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
+        inverse = np.empty(n, dtype=np.int64)
+        inverse[order] = np.cumsum(fresh) - 1
         if len(first) < n:
             zero = np.zeros(len(first))
             shapes = _vehicle_turns(
@@ -466,7 +472,7 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
                 vehicle,
                 step_m,
             )
-            return _translate(shapes, inverse.ravel(), ends)
+            return _translate(shapes, inverse, ends)
     return _vehicle_turns(ends, vehicle, step_m)
 
 
@@ -499,6 +505,18 @@ def take_turns(curves: TurnCurves, ids: IntArray) -> TurnCurves:
     point = np.repeat(curves.offsets[ids] - offsets[:-1], sizes) + np.arange(offsets[-1])
     return TurnCurves(
         curves.xy[point], offsets, curves.length_m[ids], curves.turn_rad[ids], curves.radius_m
+    )
+
+
+def turn_range(curves: TurnCurves, first: int, stop: int) -> TurnCurves:
+    """Return the turns ``first … stop - 1`` of ``curves`` (views where it can)."""
+    begin, end = int(curves.offsets[first]), int(curves.offsets[stop])
+    return TurnCurves(
+        curves.xy[begin:end],
+        curves.offsets[first : stop + 1] - begin,
+        curves.length_m[first:stop],
+        curves.turn_rad[first:stop],
+        curves.radius_m,
     )
 
 
