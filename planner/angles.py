@@ -34,9 +34,11 @@ _TIE_M = 1e-6
 #: (R5: 0.2 percentage points).
 COVERAGE_SLACK = 0.002
 #: Local refinement: the best this many distinct eligible headings are swept ...
-REFINE_SEEDS = 8
+REFINE_SEEDS = 16
 #: ... at this step [deg], nine on each side (filling the 1° sweep).
 REFINE_STEP_DEG = 0.1
+#: ... and so are the best-covering this many, for coverage (the rule's bound).
+COVERAGE_SEEDS = 3
 #: Rounds of refinement: the first around the seeds, the next around a winner that moved.
 REFINE_ROUNDS = 3
 #: Seeds may be this far below the best coverage (the sweep between them may not be).
@@ -255,27 +257,32 @@ def search_headings(
         # Seeds may fall a little short of the rule: coverage varies fast between degrees.
         hopeful = affordable & (coverage >= best_coverage - SEED_SLACK)
         picked = _seeds(lengths, counts, hopeful, headings, objective, REFINE_SEEDS)
-        centres = np.unique(np.concatenate([[headings[best]], headings[picked]]))
+        # The rule's bound is the best coverage, which also peaks between the coarse
+        # headings: the first round sweeps round the best-covering one too, for coverage.
+        by_coverage = np.where(affordable, coverage, -np.inf)
+        tops = _spread(np.lexsort((headings, -by_coverage)), headings, affordable, COVERAGE_SEEDS)
+        top_grid = np.round(headings[tops] / REFINE_STEP_DEG) * REFINE_STEP_DEG
+        centres = np.unique(np.concatenate([[headings[best]], top_grid, headings[picked]]))
         pool = _Pool(headings, lengths, counts, coverage)
-        for _ in range(REFINE_ROUNDS):
+        for round_ in range(REFINE_ROUNDS):
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.
             grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
             near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
             near = np.setdiff1d(np.unique(near), pool.headings)
-            if len(near) == 0:
+            near_lengths, near_counts = lengths_of(near) if len(near) else _no_scores(pool)
+            pool = pool.extend(near, near_lengths, near_counts, np.full(len(near), np.nan))
+            # Coverage for every scored heading that would beat the choice (the shortest
+            # headings often trade coverage for length: the constrained optimum sits on the
+            # coverage bound), also those a previous round scored for length only.
+            key = _objective_key(pool.lengths, pool.counts, objective)
+            wanted = np.isnan(pool.coverage) & (key < key[pool.index(chosen[0])])
+            if round_ == 0:
+                gap = np.abs((pool.headings[:, None] - top_grid + 90.0) % 180.0 - 90.0)
+                wanted |= np.isnan(pool.coverage) & (gap.min(axis=1) <= 9.5 * REFINE_STEP_DEG)
+            if not wanted.any():
                 break
-            near_lengths, near_counts = lengths_of(near)
-            key = _objective_key(near_lengths, near_counts, objective)
-            better = (
-                key < _objective_key(pool.lengths, pool.counts, objective)[pool.index(chosen[0])]
-            )
-            near_coverage = np.full(len(near), np.nan)
-            if better.any():
-                # The shortest headings often trade coverage for length: the constrained
-                # optimum sits on the coverage bound, so all of them are scored at once.
-                near_coverage[better] = coverage_of(near[better])
-                best_coverage = max(best_coverage, float(np.nanmax(near_coverage)))
-            pool = pool.extend(near, near_lengths, near_counts, near_coverage)
+            pool.coverage[wanted] = coverage_of(pool.headings[wanted])
+            best_coverage = max(best_coverage, float(np.nanmax(pool.coverage)))
             ok = (pool.counts <= MAX_LINES) & (
                 pool.coverage >= best_coverage - COVERAGE_SLACK - 1e-12
             )
@@ -369,6 +376,12 @@ class _Pool:
             np.concatenate([self.counts, counts]),
             np.concatenate([self.coverage, coverage]),
         )
+
+
+def _no_scores(pool: _Pool) -> tuple[VariantLengths, IntArray]:
+    """Empty scores, shaped like the pool's."""
+    empty = np.zeros((0, 4))
+    return VariantLengths(np.zeros(0), empty, empty), np.zeros(0, dtype=np.int64)
 
 
 def _objective_key(lengths: VariantLengths, counts: IntArray, objective: Objective) -> FloatArray:

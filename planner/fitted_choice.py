@@ -182,6 +182,22 @@ def choose_convex(
             lost_pp = max(best_checked - first.covered_m2, 0.0) / area * 100.0
             return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
         beaten = True
+    # Below the estimate's rule: on a field of a few dozen lines fitting the alternatives
+    # costs little, and they settle it on the plan's own lines.
+    if first is not None and not beaten and choice.line_count <= _FIT_ALTERNATIVES_MAX_LINES:
+        checked = []
+        for heading, variant in choice.alternatives:
+            if heading == choice.heading_deg:
+                continue
+            try:
+                checked.append(fitted(heading, variant))
+            except InvalidParameterError:
+                continue
+        best_checked = max((c.covered_m2 for c in checked), default=0.0)
+        if first.covered_m2 >= best_checked - slack_m2:
+            lost_pp = max(best_checked - first.covered_m2, 0.0) / area * 100.0
+            return FittedChoice(first, lost_pp)
+        beaten = True
     # The search's estimate counts lines, not the slope of the boundary they end on, and on a
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
     # Edge by edge (planner.line_ends.edge_loss_m2), the choice may still keep the rule.
@@ -235,6 +251,7 @@ def _doubtful_alternatives(
     """
     d = float(interval_m)
     reach_m = end_reach_m(vehicle, d)
+    per_line_m2 = d * (vehicle.width_m + 2.0 * reach_m)  # what a line more is charged
     doubtful = []
     for alternative, count, estimate in zip(
         choice.alternatives,
@@ -242,12 +259,19 @@ def _doubtful_alternatives(
         choice.alternative_coverage,
         strict=True,
     ):
-        if count == choice.line_count or alternative[0] == choice.heading_deg:
+        if alternative[0] == choice.heading_deg:
             continue
+        if abs(count - choice.line_count) * per_line_m2 <= COVERAGE_SLACK / 2.0 * area_m2:
+            continue  # as many lines, or too few more to matter
         turns_m2 = 2.0 * max(count - 1, 0) * d * reach_m
         if (estimate + COVERAGE_SLACK) * area_m2 + turns_m2 > chosen_m2:
             doubtful.append(alternative)
     return doubtful
+
+
+#: A choice below its estimate's rule on a field of at most this many lines is checked
+#: against its fitted alternatives rather than the edge-by-edge estimate.
+_FIT_ALTERNATIVES_MAX_LINES = 100
 
 
 #: The edge-by-edge estimate is trusted on fields at least this many turns' reach across
