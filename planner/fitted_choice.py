@@ -245,13 +245,10 @@ def _doubtful_alternatives(
 
     The estimate charges the fitting per line (:func:`planner.line_ends.fitting_loss_m2`):
     between headings with as many lines it is fair, but on a field a few lines across a line
-    more or less can be off by more than the rule's slack. Such an alternative is doubtful
-    unless, even if its turns pulled no line end back at all, it could not cover more than
-    the rule allows beyond the choice's fitted lines.
+    more or less can be off by more than the rule's slack. Such an alternative is doubtful if
+    its estimate comes within the rule of what the choice's fitted lines cover.
     """
-    d = float(interval_m)
-    reach_m = end_reach_m(vehicle, d)
-    per_line_m2 = d * (vehicle.width_m + 2.0 * reach_m)  # what a line more is charged
+    per_line_m2 = interval_m * (vehicle.width_m + 2.0 * end_reach_m(vehicle, float(interval_m)))
     doubtful = []
     for alternative, count, estimate in zip(
         choice.alternatives,
@@ -263,8 +260,7 @@ def _doubtful_alternatives(
             continue
         if abs(count - choice.line_count) * per_line_m2 <= COVERAGE_SLACK / 2.0 * area_m2:
             continue  # as many lines, or too few more to matter
-        turns_m2 = 2.0 * max(count - 1, 0) * d * reach_m
-        if (estimate + COVERAGE_SLACK) * area_m2 + turns_m2 > chosen_m2:
+        if (estimate + COVERAGE_SLACK) * area_m2 > chosen_m2:
             doubtful.append(alternative)
     return doubtful
 

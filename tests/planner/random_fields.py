@@ -49,14 +49,19 @@ def fields_with_holes(
 
 
 def random_convex_jobs(
-    count: int, *, seed: int = 9, min_area_m2: float = 2e3, max_area_m2: float = 2e5
+    count: int,
+    *,
+    seed: int = 9,
+    min_area_m2: float = 2e3,
+    max_area_m2: float = 2e5,
+    min_lines: float = 8.0,
 ) -> list[tuple[Polygon, float, tuple[float, float] | None, tuple[float, float] | None]]:
     """A fixed set of random convex fields (WGS84) with an interval, a start and a finish.
 
     The same draw as ``tests.planner.test_pipeline.convex_fields`` (3–16 hull points, any
     aspect and rotation, anywhere on Earth), but from a seeded generator, so that a bench can
     measure the same fields every time; areas ``min_area_m2`` to ``max_area_m2``, intervals
-    such that a field has some 8 to 100 lines across.
+    such that a field has some ``min_lines`` to 100 lines across.
     """
     from planner.projection import local_frame  # the planner is only needed here
 
@@ -73,7 +78,7 @@ def random_convex_jobs(
         hull = shapely.affinity.scale(hull, *(2 * [math.sqrt(area / hull.area)]))
         hull = shapely.affinity.rotate(hull, float(rng.uniform(0.0, 360.0)))
         side = math.sqrt(area)
-        interval = float(rng.uniform(max(0.5, side / 100.0), max(0.5, side / 8.0)))
+        interval = float(rng.uniform(max(0.5, side / 100.0), max(0.5, side / min_lines)))
         frame = local_frame(lon, lat)
         field = frame.to_lonlat(Polygon(hull.exterior.coords))
         reach = side + 200.0
