@@ -166,6 +166,13 @@ class HeadingChoice:
         Lines at each alternative.
     alternative_coverage : tuple of float
         Each alternative's coverage, as the scorer gave it.
+    scored_headings : ndarray or None
+        Every heading the search scored [deg] (the coarse candidates and the refined ones).
+    scored_coverage : ndarray or None
+        Their coverage as the scorer gave it; NaN where it was not needed (scored for length
+        only) or the heading needs more than :data:`MAX_LINES` lines.
+    scored_variants : ndarray or None
+        The shortest variant at each.
     """
 
     heading_deg: float
@@ -176,6 +183,9 @@ class HeadingChoice:
     line_count: int = 0
     alternative_line_counts: tuple[int, ...] = ()
     alternative_coverage: tuple[float, ...] = ()
+    scored_headings: FloatArray | None = None
+    scored_coverage: FloatArray | None = None
+    scored_variants: IntArray | None = None
 
 
 def coverage_eligible(coverage: FloatArray) -> npt.NDArray[np.bool_]:
@@ -308,6 +318,9 @@ def search_headings(
         int(pool.counts[pool.index(chosen[0])]),
         alternative_counts,
         alternative_coverage,
+        pool.headings,
+        np.where(pool.counts <= MAX_LINES, pool.coverage, np.nan),
+        np.argmin(np.round(pool.lengths.total / _TIE_M), axis=1),
     )
 
 
