@@ -34,9 +34,11 @@ _TIE_M = 1e-6
 #: (R5: 0.2 percentage points).
 COVERAGE_SLACK = 0.002
 #: Local refinement: the best this many distinct eligible headings are swept ...
-REFINE_SEEDS = 8
+REFINE_SEEDS = 16
 #: ... at this step [deg], nine on each side (filling the 1° sweep).
 REFINE_STEP_DEG = 0.1
+#: ... and so are the best-covering this many, for coverage (the rule's bound).
+COVERAGE_SEEDS = 3
 #: Rounds of refinement: the first around the seeds, the next around a winner that moved.
 REFINE_ROUNDS = 3
 #: Seeds may be this far below the best coverage (the sweep between them may not be).
@@ -158,6 +160,12 @@ class HeadingChoice:
         Other (heading, variant) pairs worth planning in full when the scorer's coverage is
         not the plan's (a vehicle's pulled-back line ends): the best-covering scored
         headings, at least :data:`_SEED_GAP_DEG` apart, best first.
+    line_count : int
+        Lines at the chosen heading (0 if not known).
+    alternative_line_counts : tuple of int
+        Lines at each alternative.
+    alternative_coverage : tuple of float
+        Each alternative's coverage, as the scorer gave it.
     """
 
     heading_deg: float
@@ -165,6 +173,9 @@ class HeadingChoice:
     coverage_ratio: float
     coverage_given_up_pp: float
     alternatives: tuple[tuple[float, int], ...] = ()
+    line_count: int = 0
+    alternative_line_counts: tuple[int, ...] = ()
+    alternative_coverage: tuple[float, ...] = ()
 
 
 def coverage_eligible(coverage: FloatArray) -> npt.NDArray[np.bool_]:
@@ -246,27 +257,32 @@ def search_headings(
         # Seeds may fall a little short of the rule: coverage varies fast between degrees.
         hopeful = affordable & (coverage >= best_coverage - SEED_SLACK)
         picked = _seeds(lengths, counts, hopeful, headings, objective, REFINE_SEEDS)
-        centres = np.unique(np.concatenate([[headings[best]], headings[picked]]))
+        # The rule's bound is the best coverage, which also peaks between the coarse
+        # headings: the first round sweeps round the best-covering one too, for coverage.
+        by_coverage = np.where(affordable, coverage, -np.inf)
+        tops = _spread(np.lexsort((headings, -by_coverage)), headings, affordable, COVERAGE_SEEDS)
+        top_grid = np.round(headings[tops] / REFINE_STEP_DEG) * REFINE_STEP_DEG
+        centres = np.unique(np.concatenate([[headings[best]], top_grid, headings[picked]]))
         pool = _Pool(headings, lengths, counts, coverage)
-        for _ in range(REFINE_ROUNDS):
+        for round_ in range(REFINE_ROUNDS):
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.
             grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
             near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
             near = np.setdiff1d(np.unique(near), pool.headings)
-            if len(near) == 0:
+            near_lengths, near_counts = lengths_of(near) if len(near) else _no_scores(pool)
+            pool = pool.extend(near, near_lengths, near_counts, np.full(len(near), np.nan))
+            # Coverage for every scored heading that would beat the choice (the shortest
+            # headings often trade coverage for length: the constrained optimum sits on the
+            # coverage bound), also those a previous round scored for length only.
+            key = _objective_key(pool.lengths, pool.counts, objective)
+            wanted = np.isnan(pool.coverage) & (key < key[pool.index(chosen[0])])
+            if round_ == 0:
+                gap = np.abs((pool.headings[:, None] - top_grid + 90.0) % 180.0 - 90.0)
+                wanted |= np.isnan(pool.coverage) & (gap.min(axis=1) <= 9.5 * REFINE_STEP_DEG)
+            if not wanted.any():
                 break
-            near_lengths, near_counts = lengths_of(near)
-            key = _objective_key(near_lengths, near_counts, objective)
-            better = (
-                key < _objective_key(pool.lengths, pool.counts, objective)[pool.index(chosen[0])]
-            )
-            near_coverage = np.full(len(near), np.nan)
-            if better.any():
-                # The shortest headings often trade coverage for length: the constrained
-                # optimum sits on the coverage bound, so all of them are scored at once.
-                near_coverage[better] = coverage_of(near[better])
-                best_coverage = max(best_coverage, float(np.nanmax(near_coverage)))
-            pool = pool.extend(near, near_lengths, near_counts, near_coverage)
+            pool.coverage[wanted] = coverage_of(pool.headings[wanted])
+            best_coverage = max(best_coverage, float(np.nanmax(pool.coverage)))
             ok = (pool.counts <= MAX_LINES) & (
                 pool.coverage >= best_coverage - COVERAGE_SLACK - 1e-12
             )
@@ -276,13 +292,23 @@ def search_headings(
             if not moved:
                 break
             centres = np.array([chosen[0]])  # re-centre on a refined winner
-        alternatives = _best_covering(pool, objective, chosen[0])
     else:
-        alternatives = _best_covering(
-            _Pool(headings, lengths, counts, coverage), objective, chosen[0]
-        )
+        pool = _Pool(headings, lengths, counts, coverage)
+    alternatives = _best_covering(pool, objective, chosen[0])
     given_up = max(best_coverage - chosen[2], 0.0) * 100.0
-    return HeadingChoice(chosen[0], chosen[1], chosen[2], given_up, alternatives)
+    at = [pool.index(h) for h, _ in alternatives]
+    alternative_counts = tuple(int(pool.counts[i]) for i in at)
+    alternative_coverage = tuple(float(pool.coverage[i]) for i in at)
+    return HeadingChoice(
+        chosen[0],
+        chosen[1],
+        chosen[2],
+        given_up,
+        alternatives,
+        int(pool.counts[pool.index(chosen[0])]),
+        alternative_counts,
+        alternative_coverage,
+    )
 
 
 #: Alternatives :func:`search_headings` offers for a re-check with the plan's own coverage.
@@ -297,16 +323,32 @@ def _best_covering(
         (pool.counts <= MAX_LINES) & np.isfinite(pool.coverage), pool.coverage, -np.inf
     )
     total = np.round(pool.lengths.total / _TIE_M) * _TIE_M
-    picked: list[int] = []
-    for i in np.lexsort(
+    order = np.lexsort(
         (pool.headings, _objective_key(pool.lengths, pool.counts, objective), -coverage)
-    ).tolist():
-        if not np.isfinite(coverage[i]) or len(picked) == ALTERNATIVES:
-            break
-        gap = np.abs((pool.headings[picked] - pool.headings[i] + 90.0) % 180.0 - 90.0)
-        if not picked or gap.min() >= _SEED_GAP_DEG:
-            picked.append(i)
+    )
+    picked = _spread(order, pool.headings, np.isfinite(coverage), ALTERNATIVES)
     return tuple((float(pool.headings[i]), int(np.argmin(total[i]))) for i in picked)
+
+
+def _spread(
+    order: IntArray, headings: FloatArray, usable: npt.NDArray[np.bool_], k: int
+) -> list[int]:
+    """Return the first ``k`` usable indices of ``order``, each a seed gap from those before.
+
+    Plain floats: there are hundreds of candidates but only a few picks.
+    """
+    picked: list[int] = []
+    taken: list[float] = []
+    heading_of = headings.tolist()
+    ok = usable.tolist()
+    for i in order.tolist():
+        if not ok[i] or len(picked) == k:
+            break
+        h = heading_of[i]
+        if all(abs((t - h + 90.0) % 180.0 - 90.0) >= _SEED_GAP_DEG for t in taken):
+            picked.append(i)
+            taken.append(h)
+    return picked
 
 
 @dataclass(frozen=True, slots=True)
@@ -336,6 +378,12 @@ class _Pool:
         )
 
 
+def _no_scores(pool: _Pool) -> tuple[VariantLengths, IntArray]:
+    """Empty scores, shaped like the pool's."""
+    empty = np.zeros((0, 4))
+    return VariantLengths(np.zeros(0), empty, empty), np.zeros(0, dtype=np.int64)
+
+
 def _objective_key(lengths: VariantLengths, counts: IntArray, objective: Objective) -> FloatArray:
     """Return what the objective minimises per heading: line count and length in one number."""
     best = np.round(lengths.total.min(axis=1) / _TIE_M) * _TIE_M
@@ -355,11 +403,5 @@ def _seeds(
 ) -> IntArray:
     """Return the best ``k`` eligible headings by the objective, a seed gap apart."""
     key = np.where(eligible, _objective_key(lengths, counts, objective), np.inf)
-    picked: list[int] = []
-    for i in np.lexsort((headings, key)).tolist():
-        if not np.isfinite(key[i]) or len(picked) == k:
-            break
-        gap = np.abs((headings[picked] - headings[i] + 90.0) % 180.0 - 90.0)
-        if not picked or gap.min() >= _SEED_GAP_DEG:
-            picked.append(i)
+    picked = _spread(np.lexsort((headings, key)), headings, np.isfinite(key), k)
     return np.asarray(picked, dtype=np.int64)

@@ -22,7 +22,7 @@ from planner.lines import from_sweep
 from planner.ordering import order_boustrophedon, order_snake
 from planner.route_builder import RouteBuilder, add_fitted_lines, densify
 from planner.routing import FieldRouter
-from planner.turns import STEP_M, TurnEnds, vehicle_turns
+from planner.turns import STEP_M, TurnCurves, TurnEnds, turn_range, vehicle_turns
 from planner.types import Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -40,13 +40,30 @@ def fit_cell(
     vehicle: Vehicle,
     skip: int,
     room: Polygon | MultiPolygon | None,
+    planned: TurnCurves | None = None,
 ) -> FittedLines:
     """Order one cell's lines by ``variant`` and pull their ends back until the turns fit.
 
-    ``room`` is the turning room already in the heading's sweep frame (or None: the cell).
+    ``room`` is the turning room already in the heading's sweep frame (or None: the cell);
+    ``planned``, the turns between the ordered lines if they are planned already.
     """
-    cell = plan.cells[cell_index]
-    k = cell.lines
+    u, a, b, index = ordered_cell_lines(plan, cell_index, variant, skip=skip)
+    return fit_lines(
+        u,
+        a,
+        b,
+        index,
+        machine=room_chains(plan.cells[cell_index], room),
+        vehicle=vehicle,
+        planned=planned,
+    )
+
+
+def ordered_cell_lines(
+    plan: CellPlan, cell_index: int, variant: int, *, skip: int
+) -> tuple[FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64]]:
+    """Return one cell's lines in driving order: ``u, v_start, v_end`` and left-to-right index."""
+    k = plan.cells[cell_index].lines
     scan = plan.scan
     u, lo, hi = scan.u[k], scan.v_lo[k], scan.v_hi[k]
     n = len(u)
@@ -54,14 +71,7 @@ def fit_cell(
         index, up = order_snake(n, variant, skip=skip)
     else:
         index, up = order_boustrophedon(n, variant)
-    return fit_lines(
-        u[index],
-        np.where(up, lo[index], hi[index]),
-        np.where(up, hi[index], lo[index]),
-        index,
-        machine=room_chains(cell, room),
-        vehicle=vehicle,
-    )
+    return u[index], np.where(up, lo[index], hi[index]), np.where(up, hi[index], lo[index]), index
 
 
 def fit_cells(
@@ -75,17 +85,49 @@ def fit_cells(
 ) -> list[FittedLines]:
     """Fit every cell of ``plan`` in its driving order (see :func:`add_cells`).
 
-    ``fits`` holds cells fitted before, by ``(cell, variant)``; new fits are added to it.
+    ``fits`` holds cells fitted before, by ``(cell, variant)``; new fits are added to it. The
+    turns between the lines of all new cells are planned in one call (a cell has a few
+    lines: planning them cell by cell was mostly call overhead).
     """
     fits = {} if fits is None else fits
     skip = snake_skip(vehicle, interval_m) if pattern == "snake" else 1
     room = None if turning_room is None else to_sweep_frame(turning_room, plan.heading_deg)
-    out = []
-    for cell_index, variant in plan.order:
-        key = (cell_index, variant)
-        if key not in fits:
-            fits[key] = fit_cell(plan, cell_index, variant, vehicle=vehicle, skip=skip, room=room)
-        out.append(fits[key])
+    todo = [key for key in dict.fromkeys(plan.order) if key not in fits]
+    ordered = [ordered_cell_lines(plan, c, v, skip=skip) for c, v in todo]
+    planned = _plan_turns(ordered, vehicle)
+    for (cell_index, variant), (u, a, b, index), turns in zip(todo, ordered, planned, strict=True):
+        fits[cell_index, variant] = fit_lines(
+            u,
+            a,
+            b,
+            index,
+            machine=room_chains(plan.cells[cell_index], room),
+            vehicle=vehicle,
+            planned=turns,
+        )
+    return [fits[key] for key in plan.order]
+
+
+def _plan_turns(
+    ordered: list[tuple[FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64]]],
+    vehicle: Vehicle,
+) -> list[TurnCurves | None]:
+    """Plan the turns between consecutive lines of every cell at once (sweep frame)."""
+    pairs = [len(u) - 1 if len(u) > 1 else 0 for u, _, _, _ in ordered]
+    if sum(pairs) == 0:
+        return [None] * len(ordered)
+    parts = []
+    for u, a, b, _ in ordered:
+        if len(u) > 1:
+            yaw = np.where(b >= a, math.pi / 2.0, -math.pi / 2.0)
+            parts.append(np.stack([u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:]]))
+    x0, y0, yaw0, x1, y1, yaw1 = np.concatenate(parts, axis=1)
+    curves = vehicle_turns(TurnEnds(x0, y0, yaw0, x1, y1, yaw1), vehicle)
+    out: list[TurnCurves | None] = []
+    first = 0
+    for count in pairs:
+        out.append(turn_range(curves, first, first + count) if count else None)
+        first += count
     return out
 
 

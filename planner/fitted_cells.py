@@ -22,7 +22,7 @@ from shapely import MultiPolygon, Polygon
 from planner.cell_plans import CellPlan
 from planner.cell_route import CellFits, fit_cells
 from planner.coverage import covered_area
-from planner.footprints import lines_covered
+from planner.footprints import cells_and_band_m2
 from planner.line_ends import FittedLines, end_reach_m
 from planner.lines import from_sweep
 from planner.turns import TurnEnds, vehicle_turns
@@ -104,14 +104,22 @@ def fit_candidate(
         turning_room=turning_room,
         fits=fits,
     )
-    covered = lines_covered(plan, fitted, field_local, area, plan.heading_deg, implement_width_m)
+    inside_m2, band_m2 = cells_and_band_m2(
+        plan, fitted, field_local, area, plan.heading_deg, implement_width_m
+    )
+    # The cheap plans' measure: footprints an interval wide, inside the cells. With the
+    # implement as wide as the interval (the default) that is the part just measured.
+    if implement_width_m == interval_m:
+        cells_m2 = inside_m2
+    else:
+        cells_m2 = cells_covered_m2(plan, fitted, interval_m)
     return FittedCells(
         plan,
         fits,
-        covered,
+        inside_m2 + band_m2,
         fitted_length_m(fitted, plan.heading_deg, start_xy, finish_xy),
         sum(len(f.u) for f in fitted),
-        cells_covered_m2(plan, fitted, interval_m),
+        cells_m2,
     )
 
 

@@ -22,7 +22,13 @@ from planner.angles import COVERAGE_SLACK, HeadingChoice, LengthScorer, candidat
 from planner.coverage import convex_chains, covered_area
 from planner.errors import InvalidParameterError
 from planner.heading_coverage import convex_coverage
-from planner.line_ends import FittedLines, convex_lines, edge_loss_m2, end_reach_m
+from planner.line_ends import (
+    FittedLines,
+    convex_lines,
+    convex_machine_area,
+    edge_loss_m2,
+    end_reach_m,
+)
 from planner.lines import from_sweep, to_sweep
 from planner.types import Objective, Pattern, Vehicle
 
@@ -119,8 +125,12 @@ def choose_convex(
     """
     ring = np.asarray(field_local.exterior.coords)[:-1]
     area = float(field_local.area)
+    machine: Polygon | None = None
 
     def fitted(heading: float, variant: int) -> FittedHeading:
+        nonlocal machine
+        if machine is None:  # where the path may run: the same at every heading
+            machine = convex_machine_area(field_local, vehicle)
         fit = convex_lines(
             field_local,
             heading,
@@ -128,6 +138,7 @@ def choose_convex(
             vehicle=vehicle,
             pattern=pattern,
             variant=variant,
+            area=machine,
         )
         u_ring, v_ring = to_sweep(ring[:, 0], ring[:, 1], heading)
         order = np.argsort(fit.index, kind="stable")
@@ -153,12 +164,44 @@ def choose_convex(
     # The search's coverage already allows for the fitting (its estimate): if the choice
     # covers within the rule of the best estimate, no alternative is fitted (the budget).
     estimated_best = choice.coverage_ratio + choice.coverage_given_up_pp / 100.0
+    slack_m2 = COVERAGE_SLACK * area + 1e-9
+    beaten = False  # a fitted alternative covers more than the rule allows beyond the choice
     if first is not None and first.covered_m2 >= (estimated_best - COVERAGE_SLACK) * area:
-        return FittedChoice(first, choice.coverage_given_up_pp)
+        # The estimate charges the fitting per line: between headings with as many lines
+        # it is fair, but a line more or less can be off by more than the rule's slack on a
+        # field a few lines across. Those alternatives are fitted and compared in full.
+        doubtful = _doubtful_alternatives(choice, interval_m, vehicle, area, first.covered_m2)
+        checked = []
+        for heading, variant in doubtful:
+            try:
+                checked.append(fitted(heading, variant))
+            except InvalidParameterError:
+                continue
+        best_checked = max((c.covered_m2 for c in checked), default=0.0)
+        if first.covered_m2 >= best_checked - slack_m2:
+            lost_pp = max(best_checked - first.covered_m2, 0.0) / area * 100.0
+            return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
+        beaten = True
+    # Below the estimate's rule: on a field of a few dozen lines fitting the alternatives
+    # costs little, and they settle it on the plan's own lines.
+    if first is not None and not beaten and choice.line_count <= _FIT_ALTERNATIVES_MAX_LINES:
+        checked = []
+        for heading, variant in choice.alternatives:
+            if heading == choice.heading_deg:
+                continue
+            try:
+                checked.append(fitted(heading, variant))
+            except InvalidParameterError:
+                continue
+        best_checked = max((c.covered_m2 for c in checked), default=0.0)
+        if first.covered_m2 >= best_checked - slack_m2:
+            lost_pp = max(best_checked - first.covered_m2, 0.0) / area * 100.0
+            return FittedChoice(first, lost_pp)
+        beaten = True
     # The search's estimate counts lines, not the slope of the boundary they end on, and on a
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
     # Edge by edge (planner.line_ends.edge_loss_m2), the choice may still keep the rule.
-    if first is not None and first.covered_m2 > 0.0:
+    if first is not None and first.covered_m2 > 0.0 and not beaten:
         given_up = _given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
         if given_up is not None:
             return FittedChoice(first, given_up)
@@ -183,13 +226,48 @@ def choose_convex(
         assert error is not None
         raise error
     best_m2 = max(o.covered_m2 for o in [*others, *([first] if first else [])])
-    slack_m2 = COVERAGE_SLACK * area + 1e-9
     chosen = first
     if chosen is None or chosen.covered_m2 < best_m2 - slack_m2:
         eligible = [o for o in others if o.covered_m2 >= best_m2 - slack_m2]
         chosen = min(eligible, key=lambda o: _key(o, objective))
     given_up_pp = max(best_m2 - chosen.covered_m2, 0.0) / area * 100.0
     return FittedChoice(chosen, given_up_pp)
+
+
+def _doubtful_alternatives(
+    choice: HeadingChoice,
+    interval_m: float,
+    vehicle: Vehicle,
+    area_m2: float,
+    chosen_m2: float,
+) -> list[tuple[float, int]]:
+    """Return the alternatives the estimate cannot rank below the choice (a line more or less).
+
+    The estimate charges the fitting per line (:func:`planner.line_ends.fitting_loss_m2`):
+    between headings with as many lines it is fair, but on a field a few lines across a line
+    more or less can be off by more than the rule's slack. Such an alternative is doubtful if
+    its estimate comes within the rule of what the choice's fitted lines cover.
+    """
+    per_line_m2 = interval_m * (vehicle.width_m + 2.0 * end_reach_m(vehicle, float(interval_m)))
+    doubtful = []
+    for alternative, count, estimate in zip(
+        choice.alternatives,
+        choice.alternative_line_counts,
+        choice.alternative_coverage,
+        strict=True,
+    ):
+        if alternative[0] == choice.heading_deg:
+            continue
+        if abs(count - choice.line_count) * per_line_m2 <= COVERAGE_SLACK / 2.0 * area_m2:
+            continue  # as many lines, or too few more to matter
+        if (estimate + COVERAGE_SLACK) * area_m2 > chosen_m2:
+            doubtful.append(alternative)
+    return doubtful
+
+
+#: A choice below its estimate's rule on a field of at most this many lines is checked
+#: against its fitted alternatives rather than the edge-by-edge estimate.
+_FIT_ALTERNATIVES_MAX_LINES = 100
 
 
 #: The edge-by-edge estimate is trusted on fields at least this many turns' reach across

@@ -35,8 +35,21 @@ def lines_covered(
     till a strip of it, which is added with shapely (two boxes per cell). The corners of
     footprints that poke past a slanted line end are not counted (a slight underestimate).
     """
+    cells_m2, band_m2 = cells_and_band_m2(plan, fitted, field_local, area, heading, width_m)
+    return cells_m2 + band_m2
+
+
+def cells_and_band_m2(
+    plan: CellPlan | None,
+    fitted: list[FittedLines],
+    field_local: Polygon,
+    area: Polygon | MultiPolygon,
+    heading: float,
+    width_m: float,
+) -> tuple[float, float]:
+    """:func:`lines_covered` in its two parts: inside the cells, and in the band beyond [m²]."""
     if plan is None or not fitted:
-        return 0.0
+        return 0.0, 0.0
     total = 0.0
     outer: list[FittedLines] = []
     for (cell_index, _), fit in zip(plan.order, fitted, strict=True):
@@ -49,14 +62,30 @@ def lines_covered(
         ends = order[[0, -1]]
         outer.append(replace(fit, u=fit.u[ends], v_start=fit.v_start[ends], v_end=fit.v_end[ends]))
     boxes = np.asarray(line_footprints(outer, heading, width_m))
+    band = 0.0
     if len(boxes):
         shapely.prepare(area)
         out = boxes[~shapely.contains(area, boxes)]
         if len(out):
-            reach = shapely.union_all(out, grid_size=UNION_GRID_M)
-            band = shapely.intersection(field_local, reach).area
-            total += float(band - shapely.intersection(area, reach).area)
-    return total
+            reach = union_boxes(out)
+            band = float(
+                shapely.intersection(field_local, reach).area
+                - shapely.intersection(area, reach).area
+            )
+    return total, band
+
+
+def union_boxes(boxes: npt.NDArray[np.object_]) -> shapely.Geometry:
+    """Union of footprint boxes: exact overlay, snapped to :data:`UNION_GRID_M` if that fails.
+
+    A handful of rectangles unite robustly without a precision grid, five times faster; the
+    snapped overlay is the fallback for the near-degenerate case GEOS refuses.
+    """
+    try:
+        united: shapely.Geometry = shapely.union_all(boxes)
+    except shapely.errors.GEOSException:
+        united = shapely.union_all(boxes, grid_size=UNION_GRID_M)
+    return united
 
 
 def line_footprints(fitted: list[FittedLines], heading: float, width_m: float) -> list[Polygon]:

@@ -28,7 +28,15 @@ from planner.coverage import Chains, convex_chains
 from planner.errors import InvalidParameterError
 from planner.lines import line_positions, to_sweep
 from planner.ordering import order_boustrophedon, order_snake
-from planner.turns import TurnCurves, TurnEnds, turning_radius_m, vehicle_turns
+from planner.turns import (
+    TurnCurves,
+    TurnEnds,
+    concat_turns,
+    no_turns,
+    take_turns,
+    turning_radius_m,
+    vehicle_turns,
+)
 from planner.types import Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -74,6 +82,7 @@ def fit_lines(
     *,
     machine: Chains,
     vehicle: Vehicle,
+    planned: TurnCurves | None = None,
 ) -> FittedLines:
     """Pull line ends back until every turn between consecutive lines fits the machine area.
 
@@ -88,6 +97,9 @@ def fit_lines(
         The machine area of the cell (the field eroded by half the vehicle's width), convex
         or sweep-monotone, in the same sweep frame.
     vehicle : Vehicle
+    planned : TurnCurves, optional
+        The ``n - 1`` turns between consecutive lines as given, if planned already (many
+        cells at once: :func:`planner.cell_route.fit_cells`).
 
     Returns
     -------
@@ -109,9 +121,14 @@ def fit_lines(
     ([0.0, 29.65, 0.35], [29.65, 0.35, 30.0])
     """
     keep = np.ones(len(u), dtype=bool)
+    up = v_end >= v_start
+    # A turn depends only on the two line ends it joins, as given (the pull-back is its own
+    # output), so a refit round reuses every turn whose pair of lines is still adjacent and
+    # plans only the turns of the pairs that dropping a line made.
+    turns = _TurnStore(u, v_start, v_end, up, machine, vehicle, planned)
     for round_ in range(_MAX_ROUNDS):
         k = np.nonzero(keep)[0]
-        fit, drop = _fit_once(u[k], v_start[k], v_end[k], index[k], machine, vehicle)
+        fit, drop = _fit_once(k, u, v_start, v_end, up, index, turns, machine)
         if not drop.any():
             return fit
         if round_ < _MAX_ROUNDS // 2:
@@ -127,36 +144,140 @@ def fit_lines(
             drop = side_drop
         keep[k[drop]] = False
     k = np.nonzero(keep)[0]
-    fit, _ = _fit_once(u[k[:1]], v_start[k[:1]], v_end[k[:1]], index[k[:1]], machine, vehicle)
+    fit, _ = _fit_once(k[:1], u, v_start, v_end, up, index, turns, machine)
     return fit
 
 
 def _fit_once(
+    k: IntArray,
+    u_all: FloatArray,
+    a_all: FloatArray,
+    b_all: FloatArray,
+    up_all: BoolArray,
+    index_all: IntArray,
+    turns: _TurnStore,
+    machine: Chains,
+) -> tuple[FittedLines, BoolArray]:
+    """One fitting round on the lines ``k``: the fitted lines, and which to drop before the next."""
+    u, a, b, up, index = u_all[k], a_all[k], b_all[k], up_all[k], index_all[k]
+    n = len(u)
+    if n < 2:
+        return FittedLines(u, a, b, index, turns.empty), np.zeros(n, dtype=bool)
+    ids = turns.ids(k[:-1], k[1:])
+    shift, fits = turns.shift[ids], turns.fits[ids]
+    a2, b2 = a.copy(), b.copy()
+    b2[:-1] += shift
+    a2[1:] += shift
+    length = np.where(up, b2 - a2, a2 - b2)
+    drop = length < 0.0
+    # A turn that cannot fit drops the outer of its two lines (nearer the side of the area),
+    # so that the lines left stay an interval apart.
+    bad = np.nonzero(~fits)[0]
+    if len(bad):
+        inset = np.minimum(u - machine.u_min, machine.u_max - u)
+        for t in bad.tolist():
+            outer = t if inset[t] <= inset[t + 1] else t + 1
+            drop[outer] = True
+    if drop.all():  # one line needs no turn: keep the longest
+        drop[int(np.argmax(np.abs(b - a)))] = False
+    if drop.any():
+        return FittedLines(u, a2, b2, index, turns.empty), drop
+    return FittedLines(u, a2, b2, index, turns.take(ids)), drop
+
+
+class _TurnStore:
+    """Every turn fitted so far, by the pair of lines it joins (:func:`fit_lines`' rounds)."""
+
+    def __init__(
+        self,
+        u: FloatArray,
+        a: FloatArray,
+        b: FloatArray,
+        up: BoolArray,
+        machine: Chains,
+        vehicle: Vehicle,
+        planned: TurnCurves | None = None,
+    ) -> None:
+        self._u, self._a, self._b, self._up = u, a, b, up
+        self._planned = planned  # the turns of the first round, if given
+        self._machine, self._vehicle = machine, vehicle
+        self._n = len(u)
+        self._slot: dict[int, int] = {}
+        self.empty = no_turns(vehicle)
+        self.curves = self.empty
+        self.shift = np.zeros(0)
+        self.fits = np.zeros(0, dtype=bool)
+
+    def ids(self, first: IntArray, second: IntArray) -> IntArray:
+        """Slots of the turns from line ``first`` to line ``second``, fitting any new ones."""
+        keys = (first * self._n + second).tolist()
+        slot = self._slot
+        new = [i for i, key in enumerate(keys) if key not in slot]
+        if new:
+            pick = np.asarray(new, dtype=np.int64)
+            planned = None
+            if self._planned is not None and not slot and len(new) == self._n - 1:
+                planned = self._planned  # the first round: every line and its next
+            curves, shift, fits = _fit_turns(
+                first[pick], second[pick], self._u, self._a, self._b, self._up,
+                self._machine, self._vehicle, planned,
+            )  # fmt: skip
+            base = len(self.shift)
+            for j, i in enumerate(new):
+                slot[keys[i]] = base + j
+            self.curves = concat_turns(self.curves, curves) if base else curves
+            self.shift = np.concatenate([self.shift, shift])
+            self.fits = np.concatenate([self.fits, fits])
+        return np.fromiter((slot[key] for key in keys), dtype=np.int64, count=len(keys))
+
+    def take(self, ids: IntArray) -> TurnCurves:
+        """Return the turns in slots ``ids``, as one ragged array."""
+        curves = self.curves
+        if len(ids) == len(curves) and (ids == np.arange(len(ids))).all():
+            return curves
+        return take_turns(curves, ids)
+
+
+def _fit_turns(
+    first: IntArray,
+    second: IntArray,
     u: FloatArray,
     a: FloatArray,
     b: FloatArray,
-    index: IntArray,
+    up: BoolArray,
     machine: Chains,
     vehicle: Vehicle,
-) -> tuple[FittedLines, BoolArray]:
-    """One fitting round: the fitted lines, and which lines to drop before the next."""
-    n = len(u)
-    up = b >= a
-    if n < 2:
-        empty = vehicle_turns(_no_ends(), vehicle)
-        return FittedLines(u, a, b, index, empty), np.zeros(n, dtype=bool)
-    yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
-    ends = TurnEnds(u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:])
-    curves = vehicle_turns(ends, vehicle)
-    owner = np.repeat(np.arange(n - 1), np.diff(curves.offsets))
-    top = up[:-1]
+    planned: TurnCurves | None = None,
+) -> tuple[TurnCurves, FloatArray, BoolArray]:
+    """Plan and fit the turns from the end of each line ``first`` to the start of ``second``.
+
+    ``planned``: those turns, if they are planned already.
+
+    Returns
+    -------
+    curves : TurnCurves
+        The turns slid back along the lines so that they fit.
+    shift : ndarray
+        How far each turn slid along ``v`` (down at the top, up at the bottom) [m].
+    fits : ndarray of bool
+        Whether it fits the machine area at all.
+    """
+    if planned is None:
+        yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
+        ends = TurnEnds(u[first], b[first], yaw[first], u[second], a[second], yaw[second])
+        curves = vehicle_turns(ends, vehicle)
+    else:
+        curves = planned
+    owner = np.repeat(np.arange(len(first)), np.diff(curves.offsets))
+    top = up[first]
     pu, pv = curves.xy[:, 0], curves.xy[:, 1]
     hi = np.interp(pu, machine.hi_u, machine.hi_v)
     lo = np.interp(pu, machine.lo_u, machine.lo_v)
     beyond = (pu < machine.u_min - FIT_TOLERANCE_M) | (pu > machine.u_max + FIT_TOLERANCE_M)
-    need = np.where(top[owner], pv - hi, lo - pv)
+    top_point = top[owner]
+    need = np.where(top_point, pv - hi, lo - pv)
     need = np.where(beyond, np.inf, need)
-    delta = np.zeros(n - 1)
+    delta = np.zeros(len(first))
     np.maximum.at(delta, owner, need)
     # A chain vertex between two points of a curve (a spike of the boundary) counts too.
     seg_turn, seg_need = _chain_vertices_under(pu, pv, owner, top, machine)
@@ -165,27 +286,14 @@ def _fit_once(
     delta = np.where(reachable, delta, 0.0)
     shift = np.where(top, -delta, delta)  # along v: down at the top, up at the bottom
     moved = pv + shift[owner]
-    clash = np.where(top[owner], lo - moved, moved - hi) > FIT_TOLERANCE_M
+    clash = np.where(top_point, lo - moved, moved - hi) > FIT_TOLERANCE_M
     fits = reachable.copy()
     np.logical_and.at(fits, owner, ~clash)
     seg_turn, seg_need = _chain_vertices_under(pu, moved, owner, ~top, machine)
     np.logical_and.at(fits, seg_turn, seg_need <= FIT_TOLERANCE_M)
-    a2, b2 = a.copy(), b.copy()
-    b2[:-1] += shift
-    a2[1:] += shift
-    length = np.where(up, b2 - a2, a2 - b2)
-    drop = length < 0.0
-    # A turn that cannot fit drops the outer of its two lines (nearer the side of the area),
-    # so that the lines left stay an interval apart.
-    inset = np.minimum(u - machine.u_min, machine.u_max - u)
-    for t in np.nonzero(~fits)[0].tolist():
-        outer = t if inset[t] <= inset[t + 1] else t + 1
-        drop[outer] = True
-    if drop.all():  # one line needs no turn: keep the longest
-        drop[int(np.argmax(np.abs(b - a)))] = False
     xy = np.stack([pu, moved], axis=1)
-    turns = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
-    return FittedLines(u, a2, b2, index, turns), drop
+    fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
+    return fitted, shift, fits
 
 
 def _chain_vertices_under(
@@ -209,37 +317,26 @@ def _chain_vertices_under(
     ua, ub, va, vb = pu[i], pu[i + 1], pv[i], pv[i + 1]
     turn = owner[i]
     at_top = top[turn]
-    turns_out: list[IntArray] = []
-    needs: list[FloatArray] = []
-    for chain_top, cu, cv in (
-        (True, machine.hi_u, machine.hi_v),
-        (False, machine.lo_u, machine.lo_v),
-    ):
-        pick = at_top == chain_top
-        lo_u, hi_u = np.minimum(ua[pick], ub[pick]), np.maximum(ua[pick], ub[pick])
-        first = np.searchsorted(cu, lo_u, side="right")
-        stop = np.searchsorted(cu, hi_u, side="left")
-        count = np.maximum(stop - first, 0)
-        if not count.any():
-            continue
-        step = np.repeat(np.arange(len(count)), count)
-        vertex = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-        vertex += first[step]
-        a_u, b_u = ua[pick][step], ub[pick][step]
-        a_v, b_v = va[pick][step], vb[pick][step]
-        t = (cu[vertex] - a_u) / np.where(b_u != a_u, b_u - a_u, 1.0)
-        curve_v = a_v + t * (b_v - a_v)
-        gap = curve_v - cv[vertex] if chain_top else cv[vertex] - curve_v
-        turns_out.append(turn[pick][step])
-        needs.append(gap)
-    if not needs:
+    # Both chains in one sorted array: the lower chain's vertices shifted past every curve.
+    shift = 4.0 * (float(np.abs(pu).max(initial=0.0)) + abs(machine.u_max) + abs(machine.u_min))
+    shift += 1.0
+    cu = np.concatenate([machine.hi_u, machine.lo_u + shift])
+    cv = np.concatenate([machine.hi_v, machine.lo_v])
+    offset = np.where(at_top, 0.0, shift)
+    lo_u, hi_u = np.minimum(ua, ub) + offset, np.maximum(ua, ub) + offset
+    first = np.searchsorted(cu, lo_u, side="right")
+    stop = np.searchsorted(cu, hi_u, side="left")
+    count = np.maximum(stop - first, 0)
+    total = int(count.sum())
+    if total == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0)
-    return np.concatenate(turns_out), np.concatenate(needs)
-
-
-def _no_ends() -> TurnEnds:
-    empty = np.zeros(0)
-    return TurnEnds(empty, empty, empty, empty, empty, empty)
+    step = np.repeat(np.arange(len(count)), count)
+    vertex = np.arange(total) - np.repeat(np.cumsum(count) - count, count) + first[step]
+    a_u, b_u = ua[step] + offset[step], ub[step] + offset[step]
+    t = (cu[vertex] - a_u) / np.where(b_u != a_u, b_u - a_u, 1.0)
+    curve_v = va[step] + t * (vb[step] - va[step])
+    gap = np.where(at_top[step], curve_v - cv[vertex], cv[vertex] - curve_v)
+    return turn[step], gap
 
 
 def machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon | MultiPolygon:
@@ -321,18 +418,44 @@ def end_reach_m(vehicle: Vehicle, spacing_m: float) -> float:
     return float(max(curves.xy[:, 1].max(initial=0.0), 0.0))
 
 
-def fitting_loss_m2(vehicle: Vehicle, interval_m: float, line_counts: IntArray) -> FloatArray:
+def fitting_loss_m2(
+    vehicle: Vehicle, interval_m: float, line_counts: IntArray, widths_m: FloatArray
+) -> FloatArray:
     """Estimate the area the fitting takes from straight lines that end on the boundary [m²].
 
     Every line loses half the vehicle's width at both ends (it ends on the machine area), and
-    every end at a turn the turn's reach past it (:func:`end_reach_m`), each over one interval
-    of width. The heading search subtracts this from its closed-form coverage, so that a
-    heading with more, shorter lines is not preferred for a coverage it will not have.
+    every end at a turn the turn's reach past it (:func:`end_reach_m`), each over the strip
+    the line alone covers: one interval, but the last line's strip is what is left of the
+    field's width after the others (it overlaps its neighbour, R2), so a heading whose last
+    line hardly adds a strip is not charged a whole line for it. The heading search subtracts
+    this from its closed-form coverage, so that a heading with more, shorter lines is not
+    preferred for a coverage it will not have.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    interval_m : float
+        Line spacing [m].
+    line_counts : ndarray of int, shape (H,)
+        Lines per heading.
+    widths_m : ndarray, shape (H,)
+        The field's width across the lines per heading [m].
+
+    Examples
+    --------
+    >>> from planner.vehicles import resolve_vehicle
+    >>> hand = resolve_vehicle("hand_tractor")   # 0.85 m wide, a 0.35 m pivot reach
+    >>> fitting_loss_m2(hand, 4.0, np.array([2, 3]), np.array([8.0, 8.5])).round(2).tolist()
+    [9.6, 11.6]
     """
+    d = float(interval_m)
     n = np.asarray(line_counts, dtype=float)
-    turn_ends = 2.0 * np.maximum(n - 1.0, 0.0)
-    per_m = n * vehicle.width_m + turn_ends * end_reach_m(vehicle, float(interval_m))
-    return np.asarray(per_m * float(interval_m))
+    last = np.clip(np.asarray(widths_m, dtype=float) - (n - 1.0) * d, 0.0, d)
+    strips = np.maximum(n - 1.0, 0.0) * d + last
+    # Turn ends: two per line but the first's and the last's one each.
+    turn_ends = np.where(n >= 2.0, 2.0 * np.maximum(n - 2.0, 0.0) * d + d + last, 0.0)
+    reach = end_reach_m(vehicle, d)
+    return np.asarray(strips * vehicle.width_m + turn_ends * reach)
 
 
 #: Angles between a boundary edge and the across-lines axis at which the pull-back is
@@ -417,6 +540,7 @@ def convex_lines(
     vehicle: Vehicle,
     pattern: Pattern,
     variant: int,
+    area: Polygon | None = None,
 ) -> FittedLines:
     """Place, order and fit the lines of a convex field for ``vehicle`` (sweep frame).
 
@@ -430,10 +554,9 @@ def convex_lines(
         If the vehicle does not fit the field.
     """
     d = float(interval_m)
-    area = machine_area(field_local, vehicle)
-    if isinstance(area, MultiPolygon):  # only a non-convex field erodes into pieces
-        area = max(area.geoms, key=lambda p: p.area)
-    ring = np.asarray(area.exterior.coords)[:-1]
+    if area is None:  # the same at every heading: a caller fitting many passes it in
+        area = convex_machine_area(field_local, vehicle)
+    ring = np.asarray(area.exterior.coords)[:-1]  # only a non-convex field erodes into pieces
     mu, mv = to_sweep(ring[:, 0], ring[:, 1], heading_deg)
     machine = convex_chains(mu, mv)
     outer = np.asarray(field_local.exterior.coords)[:-1]
@@ -477,6 +600,14 @@ def convex_lines(
             f"{width:.1f} m-wide field",
         )
     return fit
+
+
+def convex_machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon:
+    """Return :func:`machine_area` of a convex field (one piece), for :func:`convex_lines`."""
+    area = machine_area(field_local, vehicle)
+    if isinstance(area, MultiPolygon):  # only a non-convex field erodes into pieces
+        return max(area.geoms, key=lambda p: p.area)
+    return area
 
 
 def _convex(polygon: Polygon) -> bool:

@@ -27,7 +27,7 @@ from planner.types import (
     DEFAULT_SPEED_MPS,
     CoveragePlan,
     Objective,
-    PathSegment,
+    PathSegments,
     Pattern,
     PlanStats,
     Vehicle,
@@ -186,8 +186,8 @@ def plan_coverage(
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
         u_ring, _ = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
-        counts = line_counts(np.ptp(u_ring, axis=1), interval)
-        loss = fitting_loss_m2(machine, interval, counts) / field_m2
+        widths = np.ptp(u_ring, axis=1)
+        loss = fitting_loss_m2(machine, interval, line_counts(widths, interval), widths) / field_m2
         return convex_coverage(ring_xy, headings, interval) - loss
 
     choice = angles.search_headings(
@@ -291,6 +291,10 @@ def _with_finish(route: RouteBuilder, finish_xy: tuple[float, float] | None) -> 
     return route
 
 
+#: The kinds of segment whose lengths the plan's figures report.
+_LENGTH_KINDS = ("line", "turn", "transit", "headland", "round")
+
+
 def _assemble(
     route: RouteBuilder,
     *,
@@ -308,28 +312,30 @@ def _assemble(
     area_m2: float,
     started: float,
 ) -> CoveragePlan:
-    x, y = np.asarray(route.x), np.asarray(route.y)
+    x = np.fromiter(route.x, dtype=float, count=len(route.x))
+    y = np.fromiter(route.y, dtype=float, count=len(route.y))
     if route.segments and route.roles[-1] == "finish":
         route.segments.append(("transit", None, len(x) - 2, len(x) - 1))
     lon, lat = frame.to_lonlat_xy(x, y)
-    lon = np.round(lon, LONLAT_DECIMALS)
-    lat = np.round(lat, LONLAT_DECIMALS)
-    lon_list, lat_list = lon.tolist(), lat.tolist()
+    lon_list = np.round(lon, LONLAT_DECIMALS).tolist()
+    lat_list = np.round(lat, LONLAT_DECIMALS).tolist()
     waypoints = Waypoints(lon_list, lat_list, route.roles, route.lines)
     step = np.hypot(np.diff(x), np.diff(y))
     distance = np.concatenate(([0.0], np.cumsum(step)))
-    kinds = [kind for kind, _, _, _ in route.segments]
-    bounds = np.array([(first, last) for _, _, first, last in route.segments], dtype=np.int64)
-    seg_length = distance[bounds[:, 1]] - distance[bounds[:, 0]] if len(bounds) else np.zeros(0)
-    lengths = {
-        kind: float(seg_length[[k == kind for k in kinds]].sum())
-        for kind in ("line", "turn", "transit", "headland", "round")
-    }
-    points = list(zip(lon_list, lat_list, strict=True))
-    segments = [
-        PathSegment(kind, index, tuple(points[first : last + 1]))
-        for kind, index, first, last in route.segments
-    ]
+    # Length per kind of segment: each segment runs from its first waypoint to its last.
+    kind_codes = {kind: k for k, kind in enumerate(_LENGTH_KINDS)}
+    bounds = np.array(
+        [(kind_codes.get(kind, -1), first, last) for kind, _, first, last in route.segments],
+        dtype=np.int64,
+    ).reshape(-1, 3)
+    counted = bounds[bounds[:, 0] >= 0]
+    per_kind = np.bincount(
+        counted[:, 0],
+        distance[counted[:, 2]] - distance[counted[:, 1]],
+        minlength=len(_LENGTH_KINDS),
+    )
+    lengths = {kind: float(per_kind[k]) for kind, k in kind_codes.items()}
+    segments = PathSegments(lon_list, lat_list, route.segments)
     path_length = float(distance[-1])
     estimated_time = driving_time_s(x, y, speed_mps=speed_mps, turn_rate_dps=vehicle.turn_rate_dps)
     stats = PlanStats(
@@ -352,7 +358,7 @@ def _assemble(
     return CoveragePlan(
         field_lonlat=field_lonlat,
         waypoints=waypoints,
-        segments=tuple(segments),
+        segments=segments,
         stats=stats,
         interval_m=interval_m,
         cells_lonlat=tuple(frame.to_lonlat(cell) for cell in cells_local),

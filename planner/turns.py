@@ -437,13 +437,101 @@ def turning_radius_m(vehicle: Vehicle) -> float:
     return float(vehicle.track_m) / 2.0
 
 
+#: Turns whose relative end poses agree to this are planned once and translated [m, rad].
+SAME_SHAPE = 1e-9
+#: ... when there are at least this many turns (below, finding the shapes costs more).
+_SHAPES_FROM = 16
+
+
 def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -> TurnCurves:
     """Plan the turns ``vehicle`` drives between the given ends: the right type per turn.
 
     A vehicle that pivots (``min_turn_radius_m`` 0) takes :func:`pivot_turn`; one with a
     radius takes :func:`reeds_shepp_turn` if it may reverse, else :func:`dubins_turn`, or
     :func:`bulb_turn` where the lines are less than two radii apart.
+
+    A turn depends only on where its end is relative to its start (and the two headings):
+    along one edge of a field every U-turn is the same, so each distinct shape (to
+    :data:`SAME_SHAPE`) is planned once, from the origin, and translated to its turns.
     """
+    n = len(ends)
+    if n >= _SHAPES_FROM:
+        dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
+        keys = np.round(np.stack([dx, dy, ends.yaw0, ends.yaw1]) / SAME_SHAPE)
+        # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
+        order = np.lexsort(keys[::-1])
+        fresh = np.ones(n, dtype=bool)
+        fresh[1:] = (np.diff(keys[:, order], axis=1) != 0.0).any(axis=0)
+        first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
+        inverse = np.empty(n, dtype=np.int64)
+        inverse[order] = np.cumsum(fresh) - 1
+        if len(first) < n:
+            zero = np.zeros(len(first))
+            shapes = _vehicle_turns(
+                TurnEnds(zero, zero, ends.yaw0[first], dx[first], dy[first], ends.yaw1[first]),
+                vehicle,
+                step_m,
+            )
+            return _translate(shapes, inverse, ends)
+    return _vehicle_turns(ends, vehicle, step_m)
+
+
+def _translate(shapes: TurnCurves, shape_of: IntArray, ends: TurnEnds) -> TurnCurves:
+    """Turn ``k`` is ``shapes``' turn ``shape_of[k]`` moved to start at its own start."""
+    curves = take_turns(shapes, shape_of)
+    owner = np.repeat(np.arange(len(shape_of)), np.diff(curves.offsets))
+    xy = curves.xy
+    xy[:, 0] += ends.x0[owner]
+    xy[:, 1] += ends.y0[owner]
+    # Each curve starts and ends exactly on its own line ends.
+    xy[curves.offsets[:-1], 0], xy[curves.offsets[:-1], 1] = ends.x0, ends.y0
+    xy[curves.offsets[1:] - 1, 0], xy[curves.offsets[1:] - 1, 1] = ends.x1, ends.y1
+    return curves
+
+
+def no_turns(vehicle: Vehicle) -> TurnCurves:
+    """Return an empty set of the vehicle's turns (a cell of one line)."""
+    return TurnCurves(
+        np.zeros((0, 2)), np.zeros(1, dtype=np.int64), np.zeros(0), np.zeros(0),
+        turning_radius_m(vehicle),
+    )  # fmt: skip
+
+
+def take_turns(curves: TurnCurves, ids: IntArray) -> TurnCurves:
+    """Return the turns ``ids`` of ``curves`` (any order, repeats allowed), as a new array."""
+    sizes = np.diff(curves.offsets)[ids]
+    offsets = np.zeros(len(ids) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    point = np.repeat(curves.offsets[ids] - offsets[:-1], sizes) + np.arange(offsets[-1])
+    return TurnCurves(
+        curves.xy[point], offsets, curves.length_m[ids], curves.turn_rad[ids], curves.radius_m
+    )
+
+
+def turn_range(curves: TurnCurves, first: int, stop: int) -> TurnCurves:
+    """Return the turns ``first … stop - 1`` of ``curves`` (views where it can)."""
+    begin, end = int(curves.offsets[first]), int(curves.offsets[stop])
+    return TurnCurves(
+        curves.xy[begin:end],
+        curves.offsets[first : stop + 1] - begin,
+        curves.length_m[first:stop],
+        curves.turn_rad[first:stop],
+        curves.radius_m,
+    )
+
+
+def concat_turns(a: TurnCurves, b: TurnCurves) -> TurnCurves:
+    """Return the turns of ``a`` followed by those of ``b`` (the same vehicle)."""
+    return TurnCurves(
+        np.concatenate([a.xy, b.xy]),
+        np.concatenate([a.offsets, b.offsets[1:] + a.offsets[-1]]),
+        np.concatenate([a.length_m, b.length_m]),
+        np.concatenate([a.turn_rad, b.turn_rad]),
+        a.radius_m,
+    )
+
+
+def _vehicle_turns(ends: TurnEnds, vehicle: Vehicle, step_m: float) -> TurnCurves:
     radius = turning_radius_m(vehicle)
     if vehicle.min_turn_radius_m <= 0.0:
         return pivot_turn(

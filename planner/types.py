@@ -216,6 +216,78 @@ class PathSegment:
     lonlat: tuple[tuple[float, float], ...]
 
 
+class PathSegments(Sequence[PathSegment]):
+    """The route's segments in driving order, made on access from the waypoint columns.
+
+    Like :class:`Waypoints`: a large field's plan has thousands of segments of some 50,000
+    points, and making their point tuples up front took a third of the planning time. Each
+    segment is ``(kind, index, first, last)`` over the columns (its points are the waypoints
+    ``first … last``); it compares equal to any sequence of the same segments.
+
+    Examples
+    --------
+    >>> segments = PathSegments([1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [("line", 0, 0, 1),
+    ...                                                          ("turn", None, 1, 2)])
+    >>> len(segments), segments[1]
+    (2, PathSegment(kind='turn', index=None, lonlat=((2.0, 5.0), (3.0, 6.0))))
+    >>> segments == (PathSegment("line", 0, ((1.0, 4.0), (2.0, 5.0))), segments[1])
+    True
+    """
+
+    __slots__ = ("_bounds", "_lat", "_lon")
+
+    def __init__(
+        self,
+        lon: list[float],
+        lat: list[float],
+        bounds: list[tuple[SegmentKind, int | None, int, int]],
+    ) -> None:
+        self._lon, self._lat, self._bounds = lon, lat, bounds
+
+    def __len__(self) -> int:
+        """Return the number of segments."""
+        return len(self._bounds)
+
+    @overload
+    def __getitem__(self, index: int) -> PathSegment: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[PathSegment, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> PathSegment | tuple[PathSegment, ...]:
+        """Return one segment, or a tuple of them for a slice."""
+        if isinstance(index, slice):
+            return tuple(self._make(b) for b in self._bounds[index])
+        return self._make(self._bounds[operator.index(index)])
+
+    def _make(self, bound: tuple[SegmentKind, int | None, int, int]) -> PathSegment:
+        kind, line, first, last = bound
+        points = zip(self._lon[first : last + 1], self._lat[first : last + 1], strict=True)
+        return PathSegment(kind, line, tuple(points))
+
+    def __iter__(self) -> Iterator[PathSegment]:
+        """Make the segments in order."""
+        return map(self._make, self._bounds)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal to any sequence of the same segments."""
+        if isinstance(other, Sequence) and not isinstance(other, str | bytes):
+            return len(other) == len(self) and all(a == b for a, b in zip(self, other, strict=True))
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        """Hash as the tuple of the segments would."""
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        """Show the segments as a tuple would."""
+        return f"PathSegments({tuple(self)!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle the columns (plans cross process boundaries in batch planning)."""
+        return (PathSegments, (self._lon, self._lat, self._bounds))
+
+
 @dataclass(frozen=True, slots=True)
 class PlanStats:
     """The figures of a plan (product.md §3, "Output").
@@ -285,8 +357,9 @@ class CoveragePlan:
     waypoints : sequence of Waypoint
         The route τ = [p_s, p_0, …, p_n, p_f] in driving order (the planner gives
         :class:`Waypoints`, made on access; a tuple does as well).
-    segments : tuple of PathSegment
-        The same route cut into transit legs, tillage lines, turns and headland passes.
+    segments : sequence of PathSegment
+        The same route cut into transit legs, tillage lines, turns and headland passes (the
+        planner gives :class:`PathSegments`, made on access; a tuple does as well).
     stats : PlanStats
         The plan's figures.
     interval_m : float
@@ -301,7 +374,7 @@ class CoveragePlan:
 
     field_lonlat: Polygon
     waypoints: Sequence[Waypoint]
-    segments: tuple[PathSegment, ...]
+    segments: Sequence[PathSegment]
     stats: PlanStats
     interval_m: float
     cells_lonlat: tuple[Polygon, ...] = ()
