@@ -211,9 +211,14 @@ def _integrate(
     # Cut each piece where hi crosses b or lo crosses a: between cuts the covered height
     # min(hi, b) − max(lo, a) is linear, and its positive part integrates in closed form.
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_hi = np.clip(np.nan_to_num((bk - hi0) / (hi1 - hi0), nan=0.0), 0.0, 1.0)
-        t_lo = np.clip(np.nan_to_num((ak - lo0) / (lo1 - lo0), nan=0.0), 0.0, 1.0)
-    t = np.sort(np.stack([np.zeros_like(t_hi), t_hi, t_lo, np.ones_like(t_hi)], axis=1), axis=1)
+        # fmax/fmin drop a NaN (an edge level with its bound): 0, as clipping +-inf does.
+        t_hi = np.fmin(np.fmax((bk - hi0) / (hi1 - hi0), 0.0), 1.0)
+        t_lo = np.fmin(np.fmax((ak - lo0) / (lo1 - lo0), 0.0), 1.0)
+    # Both crossings lie in [0, 1]: sorted, the four cut points are 0, the earlier, the later, 1.
+    t = np.empty((len(t_hi), 4))
+    t[:, 0], t[:, 3] = 0.0, 1.0
+    np.minimum(t_hi, t_lo, out=t[:, 1])
+    np.maximum(t_hi, t_lo, out=t[:, 2])
     height = np.minimum(hi0[:, None] + t * (hi1 - hi0)[:, None], bk[:, None]) - np.maximum(
         lo0[:, None] + t * (lo1 - lo0)[:, None], ak[:, None]
     )
