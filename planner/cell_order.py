@@ -107,7 +107,7 @@ def order_cells(
         problem = _Problem(move.reshape(m, 4, m, 4), first, last, cells.inner_m)
 
     if m <= EXHAUSTIVE_MAX_CELLS:
-        orders = np.array(list(itertools.permutations(range(m))), dtype=np.int64)
+        orders = _permutations(m)
         costs = np.round(problem.costs(orders), 9)
         return problem.variants(orders[int(np.argmin(costs))])
     candidates = np.stack([problem.greedy(), np.arange(m)])  # nearest next; sweep order
@@ -213,6 +213,14 @@ class _Problem:
             step = self.step(rows[:, t - 1], rows[:, t])
             here[:active] = (here[:active, :, None] + step).min(axis=1) + self.inner[rows[:, t]]
         return (here + self.last[candidates[:, -1]]).min(axis=1)  # type: ignore[no-any-return]
+
+
+@functools.lru_cache(maxsize=EXHAUSTIVE_MAX_CELLS + 1)
+def _permutations(m: int) -> IntArray:
+    """Return every order of ``m`` cells, shape (m!, m) (read-only, shared)."""
+    orders = np.array(list(itertools.permutations(range(m))), dtype=np.int64)
+    orders.flags.writeable = False
+    return orders
 
 
 @functools.lru_cache(maxsize=LOCAL_SEARCH_MAX_CELLS + 1)
