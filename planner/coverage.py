@@ -59,24 +59,30 @@ def convex_chains(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
     >>> c.lo_v.tolist(), c.hi_v.tolist()
     ([0.0, 0.0], [3.0, 3.0])
     """
-    m = len(u_ring)
     # An edge parallel to the lines at either end belongs to neither chain: the lower chain
     # runs bottom-left to bottom-right, the upper one top-left to top-right.
-    at_min = u_ring <= u_ring.min() + _TIE_M
-    at_max = u_ring >= u_ring.max() - _TIE_M
-    lo_start = int(np.argmin(np.where(at_min, v_ring, np.inf)))
-    lo_end = int(np.argmin(np.where(at_max, v_ring, np.inf)))
-    hi_start = int(np.argmax(np.where(at_max, v_ring, -np.inf)))
-    hi_end = int(np.argmax(np.where(at_min, v_ring, -np.inf)))
-    lower = (lo_start + np.arange((lo_end - lo_start) % m + 1)) % m
-    upper = ((hi_start + np.arange((hi_end - hi_start) % m + 1)) % m)[::-1]
+    at_min = np.flatnonzero(u_ring <= u_ring.min() + _TIE_M)
+    at_max = np.flatnonzero(u_ring >= u_ring.max() - _TIE_M)
+    lo_start = int(at_min[np.argmin(v_ring[at_min])])
+    lo_end = int(at_max[np.argmin(v_ring[at_max])])
+    hi_start = int(at_max[np.argmax(v_ring[at_max])])
+    hi_end = int(at_min[np.argmax(v_ring[at_min])])
+    lo_u, lo_v = _ring_run(u_ring, lo_start, lo_end), _ring_run(v_ring, lo_start, lo_end)
+    hi_u, hi_v = _ring_run(u_ring, hi_start, hi_end), _ring_run(v_ring, hi_start, hi_end)
     # Rounding can make a chain step back by 1e-15 m; np.interp needs it monotone.
     return Chains(
-        lo_u=np.maximum.accumulate(u_ring[lower]),
-        lo_v=v_ring[lower],
-        hi_u=np.maximum.accumulate(u_ring[upper]),
-        hi_v=v_ring[upper],
+        lo_u=np.maximum.accumulate(lo_u),
+        lo_v=lo_v,
+        hi_u=np.maximum.accumulate(hi_u[::-1]),
+        hi_v=hi_v[::-1],
     )
+
+
+def _ring_run(values: FloatArray, start: int, end: int) -> FloatArray:
+    """Return ``values[start], ..., values[end]`` round the ring (from ``start`` on, cyclic)."""
+    if end >= start:
+        return values[start : end + 1]
+    return np.concatenate([values[start:], values[: end + 1]])
 
 
 def covered_area(
@@ -211,9 +217,14 @@ def _integrate(
     # Cut each piece where hi crosses b or lo crosses a: between cuts the covered height
     # min(hi, b) − max(lo, a) is linear, and its positive part integrates in closed form.
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_hi = np.clip(np.nan_to_num((bk - hi0) / (hi1 - hi0), nan=0.0), 0.0, 1.0)
-        t_lo = np.clip(np.nan_to_num((ak - lo0) / (lo1 - lo0), nan=0.0), 0.0, 1.0)
-    t = np.sort(np.stack([np.zeros_like(t_hi), t_hi, t_lo, np.ones_like(t_hi)], axis=1), axis=1)
+        # fmax/fmin drop a NaN (an edge level with its bound): 0, as clipping +-inf does.
+        t_hi = np.fmin(np.fmax((bk - hi0) / (hi1 - hi0), 0.0), 1.0)
+        t_lo = np.fmin(np.fmax((ak - lo0) / (lo1 - lo0), 0.0), 1.0)
+    # Both crossings lie in [0, 1]: sorted, the four cut points are 0, the earlier, the later, 1.
+    t = np.empty((len(t_hi), 4))
+    t[:, 0], t[:, 3] = 0.0, 1.0
+    np.minimum(t_hi, t_lo, out=t[:, 1])
+    np.maximum(t_hi, t_lo, out=t[:, 2])
     height = np.minimum(hi0[:, None] + t * (hi1 - hi0)[:, None], bk[:, None]) - np.maximum(
         lo0[:, None] + t * (lo1 - lo0)[:, None], ak[:, None]
     )

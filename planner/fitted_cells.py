@@ -21,8 +21,7 @@ from shapely import MultiPolygon, Polygon
 
 from planner.cell_plans import CellPlan
 from planner.cell_route import CellFits, fit_cells
-from planner.coverage import covered_area
-from planner.footprints import cells_and_band_m2
+from planner.footprints import cell_lines, cells_and_band_m2, lines_in_cells_m2
 from planner.line_ends import FittedLines, end_reach_m
 from planner.lines import from_sweep
 from planner.turns import TurnEnds, vehicle_turns
@@ -125,14 +124,7 @@ def fit_candidate(
 
 def cells_covered_m2(plan: CellPlan, fitted: list[FittedLines], width_m: float) -> float:
     """Area of ``plan``'s cells that fitted lines ``width_m`` wide cover [m²]."""
-    total = 0.0
-    for (cell_index, _), fit in zip(plan.order, fitted, strict=True):
-        if len(fit.u):
-            order = np.argsort(fit.u, kind="stable")
-            a, b = fit.v_start[order], fit.v_end[order]
-            chains = plan.cells[cell_index].chains
-            total += covered_area(chains, fit.u[order], np.minimum(a, b), np.maximum(a, b), width_m)
-    return total
+    return lines_in_cells_m2(cell_lines(plan, fitted), width_m)
 
 
 def choose_fitted(

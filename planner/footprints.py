@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+import threading
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -10,7 +11,7 @@ import shapely
 from shapely import MultiPolygon, Polygon
 
 from planner.cell_plans import CellPlan
-from planner.coverage import covered_area
+from planner.coverage import Chains, covered_cells
 from planner.line_ends import FittedLines
 from planner.lines import from_sweep
 
@@ -18,6 +19,14 @@ from planner.lines import from_sweep
 UNION_GRID_M = 1e-6
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: The last few measures by what they were taken on (held, so compared by identity): the
+#: chosen heading's route is measured on the very lines its fit was measured on
+#: (:mod:`planner.fitted_cells`, then :func:`planner.general.plan_general`).
+_MEASURED: dict[int, tuple[tuple[object, ...], tuple[float, float]]] = {}
+_MEASURED_KEPT = 8
+_MEASURED_LOCK = threading.Lock()
 
 
 def lines_covered(
@@ -50,18 +59,45 @@ def cells_and_band_m2(
     """:func:`lines_covered` in its two parts: inside the cells, and in the band beyond [m²]."""
     if plan is None or not fitted:
         return 0.0, 0.0
-    total = 0.0
-    outer: list[FittedLines] = []
-    for (cell_index, _), fit in zip(plan.order, fitted, strict=True):
-        if len(fit.u) == 0:
-            continue
-        cell = plan.cells[cell_index]
-        order = np.argsort(fit.u, kind="stable")
-        u, a, b = fit.u[order], fit.v_start[order], fit.v_end[order]
-        total += covered_area(cell.chains, u, np.minimum(a, b), np.maximum(a, b), width_m)
-        ends = order[[0, -1]]
-        outer.append(replace(fit, u=fit.u[ends], v_start=fit.v_start[ends], v_end=fit.v_end[ends]))
-    boxes = np.asarray(line_footprints(outer, heading, width_m))
+    # Lines renumbered (planner.cell_route.add_cells) keep their arrays: those are the key.
+    key = (plan, field_local, area, *[a for f in fitted for a in (f.u, f.v_start, f.v_end)])
+    with _MEASURED_LOCK:
+        kept = _MEASURED.get(id(plan))
+    if kept is not None and _same(kept[0], key, (heading, width_m)):
+        return kept[1]
+    measured = _cells_and_band_m2(plan, fitted, field_local, area, heading, width_m)
+    with _MEASURED_LOCK:
+        _MEASURED[id(plan)] = ((*key, heading, width_m), measured)
+        while len(_MEASURED) > _MEASURED_KEPT:
+            del _MEASURED[next(iter(_MEASURED))]
+    return measured
+
+
+def _same(kept: tuple[object, ...], key: tuple[object, ...], figures: tuple[float, float]) -> bool:
+    """Whether ``kept`` was measured on the objects of ``key`` and the same ``figures``."""
+    return (
+        len(kept) == len(key) + 2
+        and all(a is b for a, b in zip(kept, key, strict=False))
+        and kept[len(key) :] == figures
+    )
+
+
+def _cells_and_band_m2(
+    plan: CellPlan,
+    fitted: list[FittedLines],
+    field_local: Polygon,
+    area: Polygon | MultiPolygon,
+    heading: float,
+    width_m: float,
+) -> tuple[float, float]:
+    """:func:`cells_and_band_m2`, measured."""
+    lines = cell_lines(plan, fitted)
+    if not len(lines.u):
+        return 0.0, 0.0
+    total = lines_in_cells_m2(lines, width_m)
+    # Only a cell's outermost lines can reach past it into the band.
+    ends = np.stack([lines.offsets[:-1], lines.offsets[1:] - 1], axis=1).ravel()
+    boxes = footprint_boxes(lines.u[ends], lines.v_lo[ends], lines.v_hi[ends], heading, width_m)
     band = 0.0
     if len(boxes):
         shapely.prepare(area)
@@ -73,6 +109,57 @@ def cells_and_band_m2(
                 - shapely.intersection(area, reach).area
             )
     return total, band
+
+
+@dataclass(frozen=True, slots=True)
+class CellLines:
+    """The fitted lines of a plan's cells that have any, each cell's left to right.
+
+    Attributes
+    ----------
+    chains : list of Chains
+        The cells, in driving order.
+    offsets : ndarray of int
+        Cell ``c`` has the lines ``offsets[c]:offsets[c + 1]``.
+    u, v_lo, v_hi : ndarray
+        The lines, sweep frame [m].
+    """
+
+    chains: list[Chains]
+    offsets: IntArray
+    u: FloatArray
+    v_lo: FloatArray
+    v_hi: FloatArray
+
+
+def cell_lines(plan: CellPlan, fitted: list[FittedLines]) -> CellLines:
+    """Gather ``fitted`` (one entry per cell of ``plan.order``) cell by cell, left to right."""
+    chains: list[Chains] = []
+    parts: list[FittedLines] = []
+    orders: list[IntArray] = []
+    for (cell_index, _), fit in zip(plan.order, fitted, strict=True):
+        if len(fit.u):
+            chains.append(plan.cells[cell_index].chains)
+            parts.append(fit)
+            orders.append(np.argsort(fit.u, kind="stable"))
+    if not parts:
+        empty = np.zeros(0)
+        return CellLines([], np.zeros(1, dtype=np.int64), empty, empty, empty)
+    counts = np.array([len(f.u) for f in parts], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    u = np.concatenate([f.u[o] for f, o in zip(parts, orders, strict=True)])
+    a = np.concatenate([f.v_start[o] for f, o in zip(parts, orders, strict=True)])
+    b = np.concatenate([f.v_end[o] for f, o in zip(parts, orders, strict=True)])
+    return CellLines(chains, offsets, u, np.minimum(a, b), np.maximum(a, b))
+
+
+def lines_in_cells_m2(lines: CellLines, width_m: float) -> float:
+    """Area of the cells that ``lines``' footprints ``width_m`` wide cover [m²].
+
+    All cells in one pass (:func:`planner.coverage.covered_cells`): the sum of
+    :func:`planner.coverage.covered_area` over the cells.
+    """
+    return covered_cells(lines.chains, lines.offsets, lines.u, lines.v_lo, lines.v_hi, width_m)
 
 
 def union_boxes(boxes: npt.NDArray[np.object_]) -> shapely.Geometry:
@@ -95,10 +182,16 @@ def line_footprints(fitted: list[FittedLines], heading: float, width_m: float) -
     u = np.concatenate([f.u for f in fitted])
     a = np.concatenate([f.v_start for f in fitted])
     b = np.concatenate([f.v_end for f in fitted])
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    return list(footprint_boxes(u, np.minimum(a, b), np.maximum(a, b), heading, width_m))
+
+
+def footprint_boxes(
+    u: FloatArray, lo: FloatArray, hi: FloatArray, heading: float, width_m: float
+) -> npt.NDArray[np.object_]:
+    """Footprints of lines ``u, [lo, hi]`` (sweep frame) as local boxes; empty lines left out."""
     half = width_m / 2.0
     cu = np.stack([u - half, u + half, u + half, u - half], axis=1)
     cv = np.stack([lo, lo, hi, hi], axis=1)
     x, y = from_sweep(cu, cv, heading)
     boxes = np.asarray(shapely.polygons(np.stack([x, y], axis=2)))
-    return list(boxes[hi > lo])
+    return boxes[hi > lo]

@@ -9,7 +9,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from planner.cell_order import CellVariants, order_cells
+from planner import cell_order
+from planner.cell_order import CellVariants, _neighbourhood, _Problem, order_cells
 
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -73,3 +74,35 @@ def test_local_search_never_loses_to_the_greedy_order(seed: int, m: int) -> None
         <= route_length(cells, greedy, start, None) + 1e-9
     )
     assert order_cells(cells, start, None) == improved  # deterministic
+
+
+@SETTINGS
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(2, 30))
+def test_local_search_costs_from_a_shared_beginning_are_its_full_costs(seed: int, m: int) -> None:
+    """Carrying each neighbour on from where it first differs gives exactly the full costs,
+    and the search's choice among equal neighbours is the first in its own order."""
+    rng = np.random.default_rng(seed)
+    # Whole metres: many neighbours tie, so the choice among equals is exercised too.
+    move = np.round(rng.uniform(0, 50, (m, 4, m, 4)))
+    first, last, inner = (np.round(rng.uniform(0, 50, (m, 4))) for _ in range(3))
+    problem = _Problem(move, first, last, inner)
+    order = rng.permutation(m).astype(np.int64)
+    positions, changed, rank = _neighbourhood(m)
+    assert np.array_equal(np.sort(rank), np.arange(len(rank)))
+    assert (positions[np.arange(len(changed)), changed] != changed).all()
+    assert (np.arange(m)[None, :] < changed[:, None])[positions != np.arange(m)].sum() == 0
+    candidates = order[positions]
+    full = problem.costs(candidates)
+    assert np.array_equal(problem.costs_from(order, candidates, changed), full)
+    # One round of the search: the first of the cheapest neighbours in its own order.
+    in_search_order = np.empty_like(full)
+    in_search_order[rank] = full
+    by_search = np.empty_like(candidates)
+    by_search[rank] = candidates
+    best = float(problem.costs(order[None])[0])
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(cell_order, "_MAX_ROUNDS", 1)
+        improved = problem.improve(order)
+    k = int(np.argmin(in_search_order))
+    expected = by_search[k] if in_search_order[k] < best - 1e-9 else order
+    assert np.array_equal(improved, expected)
