@@ -38,6 +38,7 @@ from planner import general
 from planner.errors import InvalidParameterError
 from planner.general import RouteBuilder
 from planner.line_ends import machine_area
+from planner.route_builder import densify
 from planner.routing import FieldRouter
 from planner.turns import SAGITTA_M, STEP_M, TurnEnds, dubins_turn, turning_radius_m
 from planner.types import Objective, Vehicle
@@ -486,7 +487,7 @@ class _Joiner:
             self.route.lines[-1] = core.lines[start]
         elif self.route.x:
             here = (self.route.x[-1], self.route.y[-1])
-            self.route.append("turn", None, self.router.path(here, (first[0], first[1])), "turn")
+            self.route.append("turn", None, self._routed(here, (first[0], first[1])), "turn")
             self.route.roles[-1] = core.roles[start]
             self.route.lines[-1] = core.lines[start]
         else:
@@ -593,7 +594,7 @@ class _Joiner:
         # No drivable join found: the shortest move inside the field, with corners.
         target = _nearest(points, self.ring[0]) if self.ring is not None else 0
         assert self.ring is not None
-        path = self.router.path(tuple(self.ring[0]), tuple(points[target]))
+        path = self._routed(tuple(self.ring[0]), tuple(points[target]))
         return path, 0, target
 
     def _join_to_pose(self, xy: FloatArray, yaw: float) -> tuple[FloatArray, int]:
@@ -604,7 +605,16 @@ class _Joiner:
         if k is not None:
             return self._curve, k
         assert self.ring is not None
-        return self.router.path(tuple(self.ring[0]), tuple(xy)), 0
+        return self._routed(tuple(self.ring[0]), tuple(xy)), 0
+
+    def _routed(self, here: tuple[float, float], there: tuple[float, float]) -> FloatArray:
+        """Return the shortest move inside the field, as points at most :data:`STEP_M` apart.
+
+        The fallback where no drivable curve joins: it keeps the path's corners (a vehicle
+        with a turning radius cannot take them: a known weakness), but is exported as densely
+        as every other turn (R1).
+        """
+        return densify(self.router.path(here, there), STEP_M)
 
 
 def _nearest(points: FloatArray, xy: FloatArray) -> int:
