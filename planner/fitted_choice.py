@@ -116,7 +116,10 @@ def choose_convex(
     >>> field = box(0, 0, 40, 12)
     >>> ring = np.asarray(field.exterior.coords)[:-1]
     >>> picked = choose_convex(
-    ...     field, HeadingChoice(90.0, 0, 1.0, 0.0, ((0.0, 0), (90.0, 0))),
+    ...     field,
+    ...     HeadingChoice(
+    ...         90.0, 0, 1.0, 0.0, ((0.0, 0), (90.0, 0)), alternative_coverage=(1.0, 1.0)
+    ...     ),
     ...     interval_m=4.0, implement_width_m=4.0, vehicle=resolve_vehicle("hand_tractor"),
     ...     pattern="boustrophedon", objective="shortest_path", start_xy=None, finish_xy=None,
     ...     lengths_of=lambda h: score_headings(ring, h, 4.0, None, None))
