@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,13 +19,6 @@ UNION_GRID_M = 1e-6
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
-
-#: The last few measures by what they were taken on (held, so compared by identity): the
-#: chosen heading's route is measured on the very lines its fit was measured on
-#: (:mod:`planner.fitted_cells`, then :func:`planner.general.plan_general`).
-_MEASURED: dict[int, tuple[tuple[object, ...], tuple[float, float]]] = {}
-_MEASURED_KEPT = 8
-_MEASURED_LOCK = threading.Lock()
 
 
 def lines_covered(
@@ -59,38 +51,6 @@ def cells_and_band_m2(
     """:func:`lines_covered` in its two parts: inside the cells, and in the band beyond [m²]."""
     if plan is None or not fitted:
         return 0.0, 0.0
-    # Lines renumbered (planner.cell_route.add_cells) keep their arrays: those are the key.
-    key = (plan, field_local, area, *[a for f in fitted for a in (f.u, f.v_start, f.v_end)])
-    with _MEASURED_LOCK:
-        kept = _MEASURED.get(id(plan))
-    if kept is not None and _same(kept[0], key, (heading, width_m)):
-        return kept[1]
-    measured = _cells_and_band_m2(plan, fitted, field_local, area, heading, width_m)
-    with _MEASURED_LOCK:
-        _MEASURED[id(plan)] = ((*key, heading, width_m), measured)
-        while len(_MEASURED) > _MEASURED_KEPT:
-            del _MEASURED[next(iter(_MEASURED))]
-    return measured
-
-
-def _same(kept: tuple[object, ...], key: tuple[object, ...], figures: tuple[float, float]) -> bool:
-    """Whether ``kept`` was measured on the objects of ``key`` and the same ``figures``."""
-    return (
-        len(kept) == len(key) + 2
-        and all(a is b for a, b in zip(kept, key, strict=False))
-        and kept[len(key) :] == figures
-    )
-
-
-def _cells_and_band_m2(
-    plan: CellPlan,
-    fitted: list[FittedLines],
-    field_local: Polygon,
-    area: Polygon | MultiPolygon,
-    heading: float,
-    width_m: float,
-) -> tuple[float, float]:
-    """:func:`cells_and_band_m2`, measured."""
     lines = cell_lines(plan, fitted)
     if not len(lines.u):
         return 0.0, 0.0

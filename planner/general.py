@@ -172,6 +172,7 @@ def plan_general(
 
     best: CellPlan | None = None
     fits: CellFits = {}
+    chosen: FittedCells | None = None
     turning_room = area if headland_passes else None
     given_up_pp = 0.0
     if parts:
@@ -290,7 +291,10 @@ def plan_general(
             add_headland(route, ring, pass_index, router, end_near=finish_xy if last else None)
 
     field_area = float(field_local.area)
-    lines_m2 = lines_covered(best, fitted, field_local, area, heading, implement)
+    if chosen is not None and _drives_fitted_lines(chosen, best, fitted):
+        lines_m2 = chosen.covered_m2  # measured by the fit, on these very lines
+    else:
+        lines_m2 = lines_covered(best, fitted, field_local, area, heading, implement)
     covered = lines_m2
     if rings:
         # Headland passes: the whole union, exactly (a few rings and the lines' boxes).
@@ -315,6 +319,19 @@ def plan_general(
         lines_coverage_ratio=min(lines_m2 / field_area, 1.0),
         coverage_given_up_pp=max(given_up_pp, 0.0),
     )
+
+
+def _drives_fitted_lines(
+    chosen: FittedCells, best: CellPlan | None, fitted: list[FittedLines]
+) -> bool:
+    """Whether the route drives the chosen heading's fitted lines as fitted (same cell order)."""
+    if best is not chosen.plan or len(fitted) != len(best.order):
+        return False
+    for f, key in zip(fitted, best.order, strict=True):
+        g = chosen.fits.get(key)
+        if g is None or not (f.u is g.u and f.v_start is g.v_start and f.v_end is g.v_end):
+            return False
+    return True
 
 
 def is_convex(field_local: Polygon) -> bool:
