@@ -470,13 +470,7 @@ def _critical_u(field_sweep: Polygon) -> FloatArray:
     prev_u = u[first + (local - 1) % ring_m]
     next_u = u[first + (local + 1) % ring_m]
     turn = (u - prev_u) * (next_u - u) <= 0.0
-    cuts = np.unique(u[turn])
-    keep_cut = np.concatenate(([True], np.diff(cuts) > _SNAP_M))
-    keep_cut[-1] = True
-    cuts = cuts[keep_cut]
-    if len(cuts) >= 2 and cuts[-1] - cuts[-2] <= _SNAP_M:
-        cuts = np.delete(cuts, -2)
-    return cuts
+    return _cuts(u[turn])
 
 
 def _clean_ring(u: FloatArray, v: FloatArray) -> tuple[FloatArray, FloatArray]:
