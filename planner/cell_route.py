@@ -17,12 +17,12 @@ from shapely import MultiPolygon, Polygon
 
 from planner.cell_plans import Cell, CellPlan
 from planner.coverage import Chains, cell_area, convex_chains
-from planner.line_ends import FittedLines, fit_lines, snake_skip
+from planner.line_ends import FittedLines, fit_lines, plan_line_turns, snake_skip
 from planner.lines import from_sweep
 from planner.ordering import order_boustrophedon, order_snake
 from planner.route_builder import RouteBuilder, add_fitted_lines, densify
 from planner.routing import FieldRouter
-from planner.turns import STEP_M, TurnCurves, TurnEnds, turn_range, vehicle_turns
+from planner.turns import STEP_M, TurnCurves, TurnEnds, vehicle_turns
 from planner.types import Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -94,7 +94,7 @@ def fit_cells(
     room = None if turning_room is None else to_sweep_frame(turning_room, plan.heading_deg)
     todo = [key for key in dict.fromkeys(plan.order) if key not in fits]
     ordered = [ordered_cell_lines(plan, c, v, skip=skip) for c, v in todo]
-    planned = _plan_turns(ordered, vehicle)
+    planned = plan_line_turns(ordered, vehicle)
     for (cell_index, variant), (u, a, b, index), turns in zip(todo, ordered, planned, strict=True):
         fits[cell_index, variant] = fit_lines(
             u,
@@ -106,29 +106,6 @@ def fit_cells(
             planned=turns,
         )
     return [fits[key] for key in plan.order]
-
-
-def _plan_turns(
-    ordered: list[tuple[FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64]]],
-    vehicle: Vehicle,
-) -> list[TurnCurves | None]:
-    """Plan the turns between consecutive lines of every cell at once (sweep frame)."""
-    pairs = [len(u) - 1 if len(u) > 1 else 0 for u, _, _, _ in ordered]
-    if sum(pairs) == 0:
-        return [None] * len(ordered)
-    parts = []
-    for u, a, b, _ in ordered:
-        if len(u) > 1:
-            yaw = np.where(b >= a, math.pi / 2.0, -math.pi / 2.0)
-            parts.append(np.stack([u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:]]))
-    x0, y0, yaw0, x1, y1, yaw1 = np.concatenate(parts, axis=1)
-    curves = vehicle_turns(TurnEnds(x0, y0, yaw0, x1, y1, yaw1), vehicle)
-    out: list[TurnCurves | None] = []
-    first = 0
-    for count in pairs:
-        out.append(turn_range(curves, first, first + count) if count else None)
-        first += count
-    return out
 
 
 def to_sweep_frame(geometry: Polygon | MultiPolygon, heading: float) -> Polygon | MultiPolygon:

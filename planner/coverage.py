@@ -201,7 +201,7 @@ def _covered(
     mid = (left + right) / 2.0
     lo0, lo1 = _edge_values(chains.lo_u, chains.lo_v, mid, left, right)
     hi0, hi1 = _edge_values(chains.hi_u, chains.hi_v, mid, left, right)
-    return _integrate(width, lo0, lo1, hi0, hi1, a[k], b[k])
+    return float(_integrate(width, lo0, lo1, hi0, hi1, a[k], b[k]).sum())
 
 
 def _integrate(
@@ -212,8 +212,11 @@ def _integrate(
     hi1: FloatArray,
     ak: FloatArray,
     bk: FloatArray,
-) -> float:
-    """Σ over pieces of ∫ max(0, min(hi, b) − max(lo, a)): chains linear over each piece."""
+) -> FloatArray:
+    """∫ max(0, min(hi, b) − max(lo, a)) over each piece: chains linear over each piece.
+
+    Returns the integral over each of the piece's three stretches, shape (pieces, 3).
+    """
     # Cut each piece where hi crosses b or lo crosses a: between cuts the covered height
     # min(hi, b) − max(lo, a) is linear, and its positive part integrates in closed form.
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -234,7 +237,7 @@ def _integrate(
     with np.errstate(divide="ignore", invalid="ignore"):
         crossing = np.where(high > 0, dt * high * high / (2.0 * (high - low)), 0.0)
     area = np.where(low >= 0, dt * (g0 + g1) / 2.0, np.where(high <= 0, 0.0, crossing))
-    return float(area.sum())
+    return area
 
 
 def _edge_values(
@@ -280,12 +283,68 @@ def covered_cells(
     ...                 + covered_area(b, u[4:], lo[4:], hi[4:], 4.0)))
     True
     """
+    if len(chains) == 0 or int(offsets[-1]) == 0:
+        return 0.0
+    odd, area, _ = _laid_out(chains, offsets, u, v_lo, v_hi, interval_m)
+    total = 0.0
+    for covered in odd.values():
+        total += covered
+    return total + float(area.sum())
+
+
+def covered_each_cell(
+    chains: list[Chains],
+    offsets: IntArray,
+    u: FloatArray,
+    v_lo: FloatArray,
+    v_hi: FloatArray,
+    interval_m: float,
+) -> FloatArray:
+    """:func:`covered_cells`, cell by cell [m²]: what each cell's own lines cover.
+
+    Examples
+    --------
+    >>> a = convex_chains(np.array([0.0, 16.0, 16.0, 0.0]), np.array([0.0, 0.0, 20.0, 20.0]))
+    >>> b = convex_chains(np.array([20.0, 26.0, 20.0]), np.array([0.0, 0.0, 6.0]))
+    >>> u = np.array([2.0, 6.0, 10.0, 14.0, 22.0, 24.0])
+    >>> lo, hi = np.zeros(6), np.array([20.0, 20.0, 20.0, 20.0, 4.0, 2.0])
+    >>> covered_each_cell([a, b], np.array([0, 4, 6]), u, lo, hi, 4.0).round(9).tolist()
+    [320.0, 16.0]
+    """
+    cells = len(chains)
+    each = np.zeros(cells)
+    if cells == 0 or int(offsets[-1]) == 0:
+        return each
+    odd, area, cell = _laid_out(chains, offsets, u, v_lo, v_hi, interval_m)
+    each += np.bincount(cell, weights=area.sum(axis=1), minlength=cells)
+    for c, covered in odd.items():
+        each[c] = covered
+    return each
+
+
+def _laid_out(
+    chains: list[Chains],
+    offsets: IntArray,
+    u: FloatArray,
+    v_lo: FloatArray,
+    v_hi: FloatArray,
+    interval_m: float,
+) -> tuple[dict[int, float], FloatArray, IntArray]:
+    """Measure :func:`covered_cells`' pieces: cells on their own, the rest laid out.
+
+    Returns
+    -------
+    odd : dict
+        Covered area of each cell whose footprints do not fit the laid-out form [m²].
+    area : ndarray, shape (pieces, 3)
+        The laid-out cells' pieces (:func:`_integrate`) [m²].
+    cell : ndarray of int, shape (pieces,)
+        The cell of each piece.
+    """
     d = float(interval_m)
     half = d / 2.0
     cells = len(chains)
     counts = np.diff(offsets)
-    if cells == 0 or int(offsets[-1]) == 0:
-        return 0.0
     u_min = np.array([c.u_min for c in chains])
     u_max = np.array([c.u_max for c in chains])
     # Each cell's own stretch of the axis, an interval and a metre clear of the next.
@@ -307,13 +366,13 @@ def covered_cells(
     last_pair[ends[counts >= 2]] = True
     odd = overlap & (~last_pair | ~meets)
     odd_cells = np.unique(cell_of_line[:-1][odd])
-    total = 0.0
+    alone: dict[int, float] = {}
     if len(odd_cells):
         skip = np.zeros(cells, dtype=bool)
         skip[odd_cells] = True
         for c in odd_cells.tolist():
             k = slice(int(offsets[c]), int(offsets[c + 1]))
-            total += covered_area(chains[c], u[k], v_lo[k], v_hi[k], d)
+            alone[c] = covered_area(chains[c], u[k], v_lo[k], v_hi[k], d)
         keep = ~skip[cell_of_line]
         overlap = overlap & keep[:-1]
     else:
@@ -324,7 +383,7 @@ def covered_cells(
     low = np.concatenate([v_lo[keep], np.minimum(v_lo[i], v_lo[i + 1])])
     high = np.concatenate([v_hi[keep], np.maximum(v_hi[i], v_hi[i + 1])])
     if not len(strip0):
-        return total
+        return alone, np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
     order = np.argsort(strip0, kind="stable")
     lo_u = np.concatenate([c.lo_u + b for c, b in zip(chains, base.tolist(), strict=True)])
     lo_v = np.concatenate([c.lo_v for c in chains])
@@ -332,7 +391,8 @@ def covered_cells(
     hi_v = np.concatenate([c.hi_v for c in chains])
     strips = (strip0[order], strip1[order], low[order], high[order])
     chain = (lo_u, lo_v, hi_u, hi_v)
-    return total + _covered_laid_out(*chain, u_min + base, u_max + base, *strips)
+    area, cell = _covered_laid_out(*chain, u_min + base, u_max + base, *strips)
+    return alone, area, cell
 
 
 def _covered_laid_out(
@@ -346,8 +406,11 @@ def _covered_laid_out(
     s1: FloatArray,
     a: FloatArray,
     b: FloatArray,
-) -> float:
-    """:func:`_covered` of cells laid end to end (chains concatenated, each cell's own span)."""
+) -> tuple[FloatArray, IntArray]:
+    """:func:`_covered` of cells laid end to end (chains concatenated, each cell's own span).
+
+    Returns each piece's :func:`_integrate` and its cell.
+    """
     cuts = np.unique(np.concatenate([lo_u, hi_u, s0, s1]))
     left, right = cuts[:-1], cuts[1:]
     mid = (left + right) / 2.0
@@ -359,7 +422,7 @@ def _covered_laid_out(
     width = right - left
     lo0, lo1 = _laid_out_edge_values(lo_u, lo_v, cell_lo, mid, left, right, cell)
     hi0, hi1 = _laid_out_edge_values(hi_u, hi_v, cell_lo, mid, left, right, cell)
-    return _integrate(width, lo0, lo1, hi0, hi1, a[k], b[k])
+    return _integrate(width, lo0, lo1, hi0, hi1, a[k], b[k]), cell
 
 
 def _laid_out_edge_values(

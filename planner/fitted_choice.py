@@ -11,6 +11,7 @@ the vehicle will really cover: no heading more than 0.2 pp below the best of the
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,16 +20,10 @@ import shapely
 from shapely import Polygon
 
 from planner.angles import COVERAGE_SLACK, HeadingChoice, LengthScorer, candidate_headings
-from planner.coverage import convex_chains, covered_area
+from planner.convex_fits import convex_machine_area, fit_headings
 from planner.errors import InvalidParameterError
 from planner.heading_coverage import convex_coverage
-from planner.line_ends import (
-    FittedLines,
-    convex_lines,
-    convex_machine_area,
-    edge_loss_m2,
-    end_reach_m,
-)
+from planner.line_ends import FittedLines, edge_loss_m2, end_reach_m
 from planner.lines import from_sweep, to_sweep
 from planner.types import Objective, Pattern, Vehicle
 
@@ -130,30 +125,34 @@ def choose_convex(
     area = float(field_local.area)
     machine: Polygon | None = None
 
-    def fitted(heading: float, variant: int) -> FittedHeading:
+    def fitted_many(
+        headings: Sequence[float], variants: Sequence[int]
+    ) -> list[FittedHeading | InvalidParameterError]:
         nonlocal machine
         if machine is None:  # where the path may run: the same at every heading
             machine = convex_machine_area(field_local, vehicle)
-        fit = convex_lines(
+        fits = fit_headings(
             field_local,
-            heading,
+            headings,
+            variants,
             interval_m=interval_m,
+            implement_width_m=implement_width_m,
             vehicle=vehicle,
             pattern=pattern,
-            variant=variant,
             area=machine,
         )
-        u_ring, v_ring = to_sweep(ring[:, 0], ring[:, 1], heading)
-        order = np.argsort(fit.index, kind="stable")
-        a, b = fit.v_start[order], fit.v_end[order]
-        covered = covered_area(
-            convex_chains(u_ring, v_ring),
-            fit.u[order],
-            np.minimum(a, b),
-            np.maximum(a, b),
-            implement_width_m,
-        )
-        return FittedHeading(heading, fit, covered, _length_m(fit, heading, start_xy, finish_xy))
+        return [
+            fit
+            if isinstance(fit, InvalidParameterError)
+            else FittedHeading(h, fit[0], fit[1], _length_m(fit[0], h, start_xy, finish_xy))
+            for h, fit in zip(headings, fits, strict=True)
+        ]
+
+    def fitted(heading: float, variant: int) -> FittedHeading:
+        (one,) = fitted_many([heading], [variant])
+        if isinstance(one, InvalidParameterError):
+            raise one
+        return one
 
     if fixed_heading:
         return FittedChoice(fitted(choice.heading_deg, choice.variant), 0.0)
@@ -213,18 +212,29 @@ def choose_convex(
         # twice the slack for an error not seen yet (a 2-line field: 1.0 pp beyond at one
         # heading, 0.5 pp at the choice 1.5° away).
         beyond = 0.0 if first is None else max(first.covered_m2 / area - choice.coverage_ratio, 0)
-        for heading, variant, estimate in _scored(choice):
-            if (estimate + beyond + _UNSEEN_ERROR * COVERAGE_SLACK) * area < best_m2:
+        todo = [s for s in _scored(choice) if s[0] != choice.heading_deg]
+        block = _FIRST_BLOCK
+        while todo:
+            # The bound only tightens as headings are fitted, so those it rules out now
+            # stay out: fit a block of those it admits, then replay them in order.
+            admitted = sum(
+                (estimate + beyond + _UNSEEN_ERROR * COVERAGE_SLACK) * area >= best_m2
+                for _, _, estimate in todo
+            )
+            batch, todo = todo[: min(admitted, block)], todo[min(admitted, block) :]
+            if not batch:
                 break
-            if heading == choice.heading_deg:
-                continue
-            try:
-                candidate = fitted(heading, variant)
-            except InvalidParameterError:
-                continue
-            checked.append(candidate)
-            best_m2 = max(best_m2, candidate.covered_m2)
-            beyond = max(beyond, candidate.covered_m2 / area - estimate)
+            results = fitted_many([h for h, _, _ in batch], [k for _, k, _ in batch])
+            for (_, _, estimate), candidate in zip(batch, results, strict=True):
+                if (estimate + beyond + _UNSEEN_ERROR * COVERAGE_SLACK) * area < best_m2:
+                    todo = []
+                    break
+                if isinstance(candidate, InvalidParameterError):
+                    continue
+                checked.append(candidate)
+                best_m2 = max(best_m2, candidate.covered_m2)
+                beyond = max(beyond, candidate.covered_m2 / area - estimate)
+            block *= 2
         if not checked:
             assert error is not None
             raise error
@@ -334,6 +344,8 @@ _ESTIMATE_ABOVE = 2.0
 #: Headings are fitted while their estimate, plus the largest error seen and this many times
 #: the slack, could beat the best fitted coverage.
 _UNSEEN_ERROR = 2.0
+#: Headings fitted in the first block of that check; each next block is twice as large.
+_FIRST_BLOCK = 8
 
 
 #: The edge-by-edge estimate is trusted on fields at least this many turns' reach across

@@ -437,9 +437,8 @@ def turning_radius_m(vehicle: Vehicle) -> float:
     return float(vehicle.track_m) / 2.0
 
 
-#: Turns whose relative end poses agree to this are planned once and translated [m, rad].
-SAME_SHAPE = 1e-9
-#: ... when there are at least this many turns (below, finding the shapes costs more).
+#: Turns of the same shape are found when there are at least this many (below, finding
+#: them costs more than it saves).
 _SHAPES_FROM = 16
 
 
@@ -451,29 +450,32 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     :func:`bulb_turn` where the lines are less than two radii apart.
 
     A turn depends only on where its end is relative to its start (and the two headings):
-    along one edge of a field every U-turn is the same, so each distinct shape (to
-    :data:`SAME_SHAPE`) is planned once, from the origin, and translated to its turns.
+    along one edge of a field every U-turn is the same, so each distinct shape is planned
+    once, from the origin, and translated to its turns.
     """
     n = len(ends)
+    relative = np.stack([ends.x1 - ends.x0, ends.y1 - ends.y0, ends.yaw0, ends.yaw1])
+    # Every shape is planned from the origin, then moved onto its ends, and turns share a
+    # shape only if their relative ends are the same to the last bit: so a turn's shape
+    # depends on its own relative ends alone, not on where the field lies nor on which turns
+    # are planned with it. (Equally long Reeds–Shepp words, mirror images of each other, go
+    # either way with the last bit: shared to 1e-9, a field fitted at many headings at once
+    # pulled some line ends back 0.2 m further than fitted alone. Rounded to 1e-9 instead, a
+    # straight move bent into a 37 m Dubins loop.)
+    shape_of = np.arange(n)
+    first = shape_of
     if n >= _SHAPES_FROM:
-        dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
-        keys = np.round(np.stack([dx, dy, ends.yaw0, ends.yaw1]) / SAME_SHAPE)
         # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
-        order = np.lexsort(keys[::-1])
+        order = np.lexsort(relative[::-1])
         fresh = np.ones(n, dtype=bool)
-        fresh[1:] = (np.diff(keys[:, order], axis=1) != 0.0).any(axis=0)
+        fresh[1:] = (np.diff(relative[:, order], axis=1) != 0.0).any(axis=0)
         first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
-        inverse = np.empty(n, dtype=np.int64)
-        inverse[order] = np.cumsum(fresh) - 1
-        if len(first) < n:
-            zero = np.zeros(len(first))
-            shapes = _vehicle_turns(
-                TurnEnds(zero, zero, ends.yaw0[first], dx[first], dy[first], ends.yaw1[first]),
-                vehicle,
-                step_m,
-            )
-            return _translate(shapes, inverse, ends)
-    return _vehicle_turns(ends, vehicle, step_m)
+        shape_of = np.empty(n, dtype=np.int64)
+        shape_of[order] = np.cumsum(fresh) - 1
+    dx, dy, yaw0, yaw1 = relative[:, first]
+    zero = np.zeros(len(first))
+    shapes = _vehicle_turns(TurnEnds(zero, zero, yaw0, dx, dy, yaw1), vehicle, step_m)
+    return _translate(shapes, shape_of, ends)
 
 
 def _translate(shapes: TurnCurves, shape_of: IntArray, ends: TurnEnds) -> TurnCurves:
