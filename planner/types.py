@@ -10,7 +10,7 @@ import itertools
 import operator
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, fields
-from typing import Any, Literal, overload
+from typing import Any, Literal, TypeVar, overload
 
 from shapely import Polygon
 
@@ -22,6 +22,8 @@ VehiclePreset = Literal["hand_tractor", "paper_g1000", "small_tractor", "rover"]
 
 OBJECTIVES: tuple[Objective, ...] = ("shortest_path", "fewest_lines")
 PATTERNS: tuple[Pattern, ...] = ("boustrophedon", "snake", "spiral")
+
+_Item = TypeVar("_Item")
 
 #: The paper's tractor (Quick G1000) works at 0.56 m/s.
 DEFAULT_SPEED_MPS = 0.56
@@ -107,7 +109,67 @@ class Waypoint:
     line: int | None
 
 
-class Waypoints(Sequence[Waypoint]):
+class _MadeOnAccess(Sequence[_Item]):
+    """A sequence whose items are made when they are read, from columns a subclass holds.
+
+    Subclasses give :meth:`__len__`, :meth:`_item` (make item ``i``) and :meth:`_columns`
+    (what it holds, for equality and pickling); reading by index, slice or iteration,
+    comparing with any sequence of the same items, hashing and printing come from here.
+    """
+
+    __slots__ = ()
+
+    def _item(self, i: int) -> _Item:
+        raise NotImplementedError
+
+    def _columns(self) -> tuple[Any, ...]:
+        raise NotImplementedError
+
+    @overload
+    def __getitem__(self, index: int) -> _Item: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[_Item, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> _Item | tuple[_Item, ...]:
+        """Return one item, or a tuple of them for a slice."""
+        if isinstance(index, slice):
+            return tuple(map(self._item, range(*index.indices(len(self)))))
+        i = operator.index(index)
+        if i < 0:
+            i += len(self)
+        if not 0 <= i < len(self):
+            raise IndexError(f"{type(self).__name__} index out of range")
+        return self._item(i)
+
+    def __iter__(self) -> Iterator[_Item]:
+        """Make the items in order."""
+        return map(self._item, range(len(self)))
+
+    def __eq__(self, other: object) -> bool:
+        """Equal to any sequence of the same items."""
+        if type(other) is type(self):
+            assert isinstance(other, _MadeOnAccess)
+            if self._columns() == other._columns():
+                return True  # the same columns make the same items, without making them
+        if isinstance(other, Sequence) and not isinstance(other, str | bytes):
+            return len(other) == len(self) and all(a == b for a, b in zip(self, other, strict=True))
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        """Hash as the tuple of the items would."""
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        """Show the items as a tuple would."""
+        return f"{type(self).__name__}({tuple(self)!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle the columns (plans cross process boundaries in batch planning)."""
+        return (type(self), self._columns())
+
+
+class Waypoints(_MadeOnAccess[Waypoint]):
     """The route's waypoints in driving order, made on access from plain lists.
 
     A plan of a large field with curved turns has some 50,000 waypoints; making every
@@ -148,52 +210,16 @@ class Waypoints(Sequence[Waypoint]):
         """Return the number of waypoints."""
         return len(self._lon)
 
-    @overload
-    def __getitem__(self, index: int) -> Waypoint: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> tuple[Waypoint, ...]: ...
-
-    def __getitem__(self, index: int | slice) -> Waypoint | tuple[Waypoint, ...]:
-        """Return one waypoint, or a tuple of them for a slice."""
-        if isinstance(index, slice):
-            return tuple(self[i] for i in range(*index.indices(len(self))))
-        i = operator.index(index)
-        if i < 0:
-            i += len(self)
-        if not 0 <= i < len(self):
-            raise IndexError("waypoint index out of range")
+    def _item(self, i: int) -> Waypoint:
         return Waypoint(i, self._lon[i], self._lat[i], self._roles[i], self._lines[i])
 
+    def _columns(self) -> tuple[Any, ...]:
+        return (self._lon, self._lat, self._roles, self._lines)
+
     def __iter__(self) -> Iterator[Waypoint]:
-        """Make the waypoints in order."""
+        """Make the waypoints in order (all at once: the export of a large plan reads all)."""
         columns = (range(len(self)), self._lon, self._lat, self._roles, self._lines)
         return itertools.starmap(Waypoint, zip(*columns, strict=True))
-
-    def __eq__(self, other: object) -> bool:
-        """Equal to any sequence of the same waypoints."""
-        if isinstance(other, Waypoints):
-            return (self._lon, self._lat, self._roles, self._lines) == (
-                other._lon,
-                other._lat,
-                other._roles,
-                other._lines,
-            )
-        if isinstance(other, Sequence) and not isinstance(other, str | bytes):
-            return len(other) == len(self) and all(a == b for a, b in zip(self, other, strict=True))
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        """Hash as the tuple of the waypoints would."""
-        return hash(tuple(self))
-
-    def __repr__(self) -> str:
-        """Show the waypoints as a tuple would."""
-        return f"Waypoints({tuple(self)!r})"
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        """Pickle the columns (plans cross process boundaries in batch planning)."""
-        return (Waypoints, (self._lon, self._lat, self._roles, self._lines))
 
 
 @dataclass(frozen=True, slots=True)
@@ -216,7 +242,7 @@ class PathSegment:
     lonlat: tuple[tuple[float, float], ...]
 
 
-class PathSegments(Sequence[PathSegment]):
+class PathSegments(_MadeOnAccess[PathSegment]):
     """The route's segments in driving order, made on access from the waypoint columns.
 
     Like :class:`Waypoints`: a large field's plan has thousands of segments of some 50,000
@@ -248,44 +274,13 @@ class PathSegments(Sequence[PathSegment]):
         """Return the number of segments."""
         return len(self._bounds)
 
-    @overload
-    def __getitem__(self, index: int) -> PathSegment: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> tuple[PathSegment, ...]: ...
-
-    def __getitem__(self, index: int | slice) -> PathSegment | tuple[PathSegment, ...]:
-        """Return one segment, or a tuple of them for a slice."""
-        if isinstance(index, slice):
-            return tuple(self._make(b) for b in self._bounds[index])
-        return self._make(self._bounds[operator.index(index)])
-
-    def _make(self, bound: tuple[SegmentKind, int | None, int, int]) -> PathSegment:
-        kind, line, first, last = bound
+    def _item(self, i: int) -> PathSegment:
+        kind, line, first, last = self._bounds[i]
         points = zip(self._lon[first : last + 1], self._lat[first : last + 1], strict=True)
         return PathSegment(kind, line, tuple(points))
 
-    def __iter__(self) -> Iterator[PathSegment]:
-        """Make the segments in order."""
-        return map(self._make, self._bounds)
-
-    def __eq__(self, other: object) -> bool:
-        """Equal to any sequence of the same segments."""
-        if isinstance(other, Sequence) and not isinstance(other, str | bytes):
-            return len(other) == len(self) and all(a == b for a, b in zip(self, other, strict=True))
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        """Hash as the tuple of the segments would."""
-        return hash(tuple(self))
-
-    def __repr__(self) -> str:
-        """Show the segments as a tuple would."""
-        return f"PathSegments({tuple(self)!r})"
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        """Pickle the columns (plans cross process boundaries in batch planning)."""
-        return (PathSegments, (self._lon, self._lat, self._bounds))
+    def _columns(self) -> tuple[Any, ...]:
+        return (self._lon, self._lat, self._bounds)
 
 
 @dataclass(frozen=True, slots=True)
