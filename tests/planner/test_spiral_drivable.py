@@ -155,30 +155,17 @@ def test_found_fields_are_drivable_spirals(
     assert_spiral_drivable(plan)
 
 
+@pytest.mark.parametrize("convex", [True, False], ids=["convex", "non_convex"])
 @SETTINGS
 @given(
-    field=fields_with_round_holes(convex=True),
+    data=st.data(),
     preset=st.sampled_from(sorted(PRESETS)),
     interval=st.sampled_from([1.5, 2.5, 4.0]),
 )
-def test_convex_fields_with_round_holes_are_drivable_spirals(
-    field: Polygon, preset: str, interval: float
+def test_fields_with_round_holes_are_drivable_spirals(
+    convex: bool, data: st.DataObject, preset: str, interval: float
 ) -> None:
-    plan = plan_coverage(
-        field_from_local(field), interval_m=interval, pattern="spiral", vehicle=preset
-    )
-    assert_spiral_drivable(plan)
-
-
-@SETTINGS
-@given(
-    field=fields_with_round_holes(convex=False),
-    preset=st.sampled_from(sorted(PRESETS)),
-    interval=st.sampled_from([1.5, 2.5, 4.0]),
-)
-def test_non_convex_fields_with_round_holes_are_drivable_spirals(
-    field: Polygon, preset: str, interval: float
-) -> None:
+    field = data.draw(fields_with_round_holes(convex=convex), label="field")
     plan = plan_coverage(
         field_from_local(field), interval_m=interval, pattern="spiral", vehicle=preset
     )
