@@ -25,6 +25,7 @@ import shapely
 from app.cli.batch import run_batch
 from app.jobs.engine import start_local_cluster
 from app.testing import tillpath_command
+from bench.common import small_quadrilaterals
 
 ROOT = Path(__file__).resolve().parent.parent
 FIELDS = ROOT.parent / "shared" / "fields"
@@ -57,21 +58,7 @@ def real_fields(path: Path) -> int:
 
 def generated_fields(path: Path, count: int) -> None:
     """``count`` random quadrilaterals of 0.1–0.6 ha on a grid (plans of a few lines each)."""
-    rng = np.random.default_rng(14)
-    side = int(np.ceil(np.sqrt(count)))
-    step = 0.002  # deg, about 200 m
-    geometries = []
-    for i in range(count):
-        x0, y0 = 10 + (i % side) * step, 50 + (i // side) * step
-        w, h = rng.uniform(3e-4, 9e-4, 2)
-        jitter = rng.uniform(-1e-4, 1e-4, 4)
-        ring = [
-            (x0, y0),
-            (x0 + w, y0 + jitter[0]),
-            (x0 + w + jitter[1], y0 + h),
-            (x0 + jitter[2], y0 + h + jitter[3]),
-        ]
-        geometries.append(shapely.to_wkb(shapely.Polygon(ring)))
+    geometries = [shapely.to_wkb(q) for q in small_quadrilaterals(count)]
     write_gpkg(path, geometries, [f"g{i}" for i in range(count)])
 
 
