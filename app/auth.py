@@ -218,12 +218,13 @@ def _session_credentials(session: Session, cookie: str) -> Credentials | None:
     return Credentials(user=user, via="session", login_session=row, roles=roles)
 
 
+BearerDep = Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
+CookieDep = Annotated[str | None, Depends(_cookie)]
+CsrfDep = Annotated[str | None, Depends(_csrf)]
+
+
 def credentials(
-    request: Request,
-    session: SessionDep,
-    bearer: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
-    cookie: Annotated[str | None, Depends(_cookie)],
-    csrf: Annotated[str | None, Depends(_csrf)],
+    request: Request, session: SessionDep, bearer: BearerDep, cookie: CookieDep, csrf: CsrfDep
 ) -> Credentials:
     """Authenticate the request by bearer token or session cookie (with CSRF on writes).
 
@@ -347,7 +348,12 @@ def require_role(role: Role) -> Callable[..., Access]:
         credentials, 403 naming the role needed.
     """
 
-    def dependency(request: Request, session: SessionDep, creds: CredentialsDep) -> Access:
+    def dependency(
+        request: Request, session: SessionDep, bearer: BearerDep, cookie: CookieDep, csrf: CsrfDep
+    ) -> Access:
+        # Authenticated here rather than through CredentialsDep: FastAPI runs each sync
+        # dependency in a worker thread of its own, and a thread hop less counts per request.
+        creds = credentials(request, session, bearer, cookie, csrf)
         access = resolve_access(request, session, creds)
         if access.via == "device":
             raise forbidden(
@@ -363,8 +369,11 @@ def require_role(role: Role) -> Callable[..., Access]:
     return _rule(dependency, role)
 
 
-def require_fix_poster(request: Request, session: SessionDep, creds: CredentialsDep) -> Access:
+def require_fix_poster(
+    request: Request, session: SessionDep, bearer: BearerDep, cookie: CookieDep, csrf: CsrfDep
+) -> Access:
     """Let in a device token of the organisation, or a planner or owner."""
+    creds = credentials(request, session, bearer, cookie, csrf)  # as in require_role
     access = resolve_access(request, session, creds)
     if access.via != "device" and not access.at_least("planner"):
         raise forbidden(f"this needs the planner role or a device token (you are {access.role})")
