@@ -101,4 +101,11 @@ def get_heavy_work(settings: Annotated[Settings, Depends(get_settings)]) -> Heav
     )
 
 
-HeavyWorkDep = Annotated[HeavyWork, Depends(get_heavy_work)]
+async def _heavy_work_dependency(
+    settings: Annotated[Settings, Depends(get_settings)],
+) -> HeavyWork:
+    # Async: a look-up in a cache, not worth a thread hop per request.
+    return get_heavy_work(settings)
+
+
+HeavyWorkDep = Annotated[HeavyWork, Depends(_heavy_work_dependency)]

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import random
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import AsyncIterator, Callable
 from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Final, TypeVar
@@ -25,6 +25,7 @@ from typing import Annotated, Any, Final, TypeVar
 from alembic import command
 from alembic.config import Config
 from fastapi import Depends
+from fastapi.concurrency import run_in_threadpool
 from sqlalchemy import (
     Connection,
     CursorResult,
@@ -141,14 +142,28 @@ def get_engine(url: str) -> Engine:
     return make_engine(url)
 
 
-def get_session(settings: Annotated[Settings, Depends(get_settings)]) -> Iterator[Session]:
+async def get_session(
+    settings: Annotated[Settings, Depends(get_settings)],
+) -> AsyncIterator[Session]:
     """Yield a session on the configured database, closed after the request.
 
     Objects stay loaded after ``commit`` (``expire_on_commit=False``), so a route can return
     what it just stored without another query.
+
+    Async so that FastAPI runs it on the event loop, not in a worker thread (two thread hops
+    per request otherwise): making a session does no I/O (it connects at its first query),
+    and closing one does none either once its transaction has ended. A session still in a
+    transaction (a read route) is closed in a worker thread, since its rollback may wait for
+    the database.
     """
-    with Session(get_engine(settings.database_url), expire_on_commit=False) as session:
+    session = Session(get_engine(settings.database_url), expire_on_commit=False)
+    try:
         yield session
+    finally:
+        if session.in_transaction():
+            await run_in_threadpool(session.close)
+        else:
+            session.close()
 
 
 SessionDep = Annotated[Session, Depends(get_session)]

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, Query, Response, status
+from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session
 
 from app import fields, services
@@ -34,7 +35,7 @@ _BUSY: dict[int | str, dict[str, Any]] = {
 
 
 @router.post("/preview", response_model=PlanRead, responses={**_BAD_INPUT, **_TOO_LARGE, **_BUSY})
-def preview_plan(
+async def preview_plan(
     body: PlanCreate,
     session: SessionDep,
     access: Viewer,
@@ -42,10 +43,17 @@ def preview_plan(
     heavy: HeavyWorkDep,
 ) -> Plan:
     """Plan a coverage path without storing it (``id`` and ``created_at`` are null)."""
-    resolved = fields.resolve_plan_body(session, body, access)
-    end_reads(session)  # no connection held while planning
-    with heavy.slot("preview"):
-        return services.plan_field(resolved, budget_s=settings.planning_budget_s)
+
+    def plan() -> Plan:
+        resolved = fields.resolve_plan_body(session, body, access)
+        end_reads(session)  # no connection held while planning
+        with heavy.slot("preview"):
+            return services.plan_field(resolved, budget_s=settings.planning_budget_s)
+
+    # Async with one worker thread for the work: FastAPI validates a sync route's answer in
+    # a thread hop of its own, and this is the busiest route (product.md §11: 150 per second).
+    # The answer is a transient row (no lazy loads), validated and encoded on the loop.
+    return await run_in_threadpool(plan)
 
 
 @router.post(
