@@ -291,7 +291,8 @@ def _fit_turns(
     np.logical_and.at(fits, owner, ~clash)
     seg_turn, seg_need = _chain_vertices_under(pu, moved, owner, ~top, machine)
     np.logical_and.at(fits, seg_turn, seg_need <= FIT_TOLERANCE_M)
-    xy = np.stack([pu, moved], axis=1)
+    xy = np.empty((len(pu), 2))  # np.stack([pu, moved], axis=1), without stack's cost
+    xy[:, 0], xy[:, 1] = pu, moved
     fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
     return fitted, shift, fits
 

@@ -50,6 +50,7 @@ DUBINS_WORDS: dict[str, tuple[int, int, int]] = {
 }
 BULB_WORDS = ("RLR", "LRL")
 _TWO_PI = 2.0 * math.pi
+_FLOAT_MAX = float(np.finfo(np.float64).max)
 
 
 @dataclass(frozen=True, slots=True)
@@ -265,9 +266,9 @@ def dubins_words(
     sa, sb, ca, cb = np.sin(a), np.sin(b), np.cos(a), np.cos(b)
     c_ab = np.cos(a - b)
     dd = d * d
-    candidates: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+    tpq = np.empty((len(words), 3, len(d)))  # (words, 3, T); NaN where a word has no path
     with np.errstate(invalid="ignore"):
-        for word in words:
+        for w, word in enumerate(words):
             if word == "LSL":
                 p_sq = 2.0 + dd - 2.0 * c_ab + 2.0 * d * (sa - sb)
                 tmp = np.arctan2(cb - ca, d + sa - sb)
@@ -298,9 +299,10 @@ def dubins_words(
                 q = b - a - t + p
             else:
                 raise ValueError(f"unknown Dubins word {word!r}")
-            candidates.append((_mod2pi(t), p, _mod2pi(q)))
-    tpq = np.array(candidates)  # (words, 3, T); NaN where a word has no path
-    total = np.nan_to_num(tpq.sum(axis=1), nan=np.inf)
+            tpq[w, 0], tpq[w, 1], tpq[w, 2] = _mod2pi(t), p, _mod2pi(q)
+    # np.nan_to_num(sums, nan=np.inf) without its Python-level cost (±inf to ±max, as it does).
+    sums = tpq.sum(axis=1)
+    total = np.where(np.isnan(sums), np.inf, np.clip(sums, -_FLOAT_MAX, _FLOAT_MAX))
     if not np.isfinite(total).any(axis=0).all():
         raise ValueError("no Dubins word joins these poses")  # only if ``words`` is narrowed
     best = np.argmin(total, axis=0)

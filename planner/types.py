@@ -195,6 +195,13 @@ class Waypoints(Sequence[Waypoint]):
         """Pickle the columns (plans cross process boundaries in batch planning)."""
         return (Waypoints, (self._lon, self._lat, self._roles, self._lines))
 
+    def columns(self) -> tuple[list[float], list[float], list[WaypointRole], list[int | None]]:
+        """Return the columns ``(lon, lat, roles, lines)`` as held (do not modify them).
+
+        For writers that need every waypoint's fields (GeoJSON): no :class:`Waypoint` made.
+        """
+        return self._lon, self._lat, self._roles, self._lines
+
 
 @dataclass(frozen=True, slots=True)
 class PathSegment:
@@ -286,6 +293,12 @@ class PathSegments(Sequence[PathSegment]):
     def __reduce__(self) -> tuple[Any, ...]:
         """Pickle the columns (plans cross process boundaries in batch planning)."""
         return (PathSegments, (self._lon, self._lat, self._bounds))
+
+    def columns(
+        self,
+    ) -> tuple[list[float], list[float], list[tuple[SegmentKind, int | None, int, int]]]:
+        """Return ``(lon, lat, bounds)`` as held: each segment is ``(kind, index, first, last)``."""
+        return self._lon, self._lat, self._bounds
 
 
 @dataclass(frozen=True, slots=True)
