@@ -332,7 +332,7 @@ def search_headings(
         alternative_coverage,
         pool.headings,
         np.where(pool.counts <= MAX_LINES, pool.coverage, np.nan),
-        np.argmin(np.round(pool.lengths.total / _TIE_M), axis=1),
+        pool.tied.argmin(axis=1),  # as of the rounded lengths: × _TIE_M keeps their order
     )
 
 

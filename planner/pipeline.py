@@ -331,7 +331,7 @@ def _assemble(
     lon_list = np.round(lon, LONLAT_DECIMALS).tolist()
     lat_list = np.round(lat, LONLAT_DECIMALS).tolist()
     waypoints = Waypoints(lon_list, lat_list, route.roles, route.lines)
-    step = np.hypot(np.diff(x), np.diff(y))
+    step = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # np.diff, without its wrapper's cost
     distance = np.concatenate(([0.0], np.cumsum(step)))
     # Length per kind of segment: each segment runs from its first waypoint to its last.
     kind_codes = {kind: k for k, kind in enumerate(_LENGTH_KINDS)}
