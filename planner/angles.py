@@ -76,8 +76,9 @@ def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> F
     """
     if fixed_deg is not None:
         return np.array([float(fixed_deg)])
-    dx = np.roll(ring_xy[:, 0], -1) - ring_xy[:, 0]
-    dy = np.roll(ring_xy[:, 1], -1) - ring_xy[:, 1]
+    nxt = np.concatenate([ring_xy[1:], ring_xy[:1]])  # np.roll(ring_xy, -1, axis=0), cheaper
+    dx = nxt[:, 0] - ring_xy[:, 0]
+    dy = nxt[:, 1] - ring_xy[:, 1]
     length = np.hypot(dx, dy)
     longest = np.argsort(-length, kind="stable")[:MAX_EDGE_HEADINGS]
     longest = longest[length[longest] > 0]
@@ -94,13 +95,15 @@ def select_plan(
     *,
     interval_m: float | None = None,
     eligible: npt.NDArray[np.bool_] | None = None,
+    tied: FloatArray | None = None,
 ) -> tuple[int, int]:
     """Pick the (heading index, variant index) the objective prefers.
 
     ``shortest_path`` minimises the whole path; ``fewest_lines`` minimises the line count,
     then the path. Ties go to the first heading and variant, so the choice is deterministic.
     Headings that need more than :data:`MAX_LINES` lines, and those not ``eligible`` (if
-    given: the coverage rule of R5), are never chosen.
+    given: the coverage rule of R5), are never chosen. ``tied``: :func:`tied_lengths` of
+    ``lengths``, if the caller has it.
 
     Raises
     ------
@@ -125,7 +128,7 @@ def select_plan(
             f"{at}the field needs at least {int(counts.min()):,} tillage lines; tillpath "
             f"plans at most {MAX_LINES:,}: choose a wider interval or a smaller field",
         )
-    total = np.round(lengths.total / _TIE_M) * _TIE_M
+    total = tied_lengths(lengths) if tied is None else tied
     allowed = counts <= MAX_LINES
     if eligible is not None and (allowed & eligible).any():
         allowed = allowed & eligible
@@ -135,6 +138,11 @@ def select_plan(
         total = np.where(fewest[:, None], total, np.inf)
     flat = int(np.argmin(total))
     return flat // 4, flat % 4
+
+
+def tied_lengths(lengths: VariantLengths) -> FloatArray:
+    """Path lengths rounded to :data:`_TIE_M`, so that ties break the same way every time."""
+    return np.asarray(np.round(lengths.total / _TIE_M) * _TIE_M)
 
 
 #: ``lengths(headings) -> (path lengths of the four variants, line counts)``.
@@ -254,37 +262,39 @@ def search_headings(
     """
     headings = np.asarray(headings_deg, dtype=float)
     lengths, counts = lengths_of(headings)
+    tied = tied_lengths(lengths)  # rounded once: every pick below reads them
     # One heading (a fixed angle) gives nothing up, whatever its coverage.
     coverage = coverage_of(headings) if len(headings) > 1 else np.ones(1)
     affordable = counts <= MAX_LINES
     eligible = affordable & coverage_eligible(np.where(affordable, coverage, -np.inf))
     best, variant = select_plan(
-        lengths, counts, objective, interval_m=interval_m, eligible=eligible
+        lengths, counts, objective, interval_m=interval_m, eligible=eligible, tied=tied
     )
     best_coverage = float(coverage[affordable].max()) if affordable.any() else 0.0
     chosen = (float(headings[best]), variant, float(coverage[best]))
     if refine:
         # Seeds may fall a little short of the rule: coverage varies fast between degrees.
         hopeful = affordable & (coverage >= best_coverage - SEED_SLACK)
-        picked = _seeds(lengths, counts, hopeful, headings, objective, REFINE_SEEDS)
+        picked = _seeds(tied, counts, hopeful, headings, objective, REFINE_SEEDS)
         # The rule's bound is the best coverage, which also peaks between the coarse
         # headings: the first round sweeps round the best-covering one too, for coverage.
         by_coverage = np.where(affordable, coverage, -np.inf)
         tops = _spread(np.lexsort((headings, -by_coverage)), headings, affordable, COVERAGE_SEEDS)
         top_grid = np.round(headings[tops] / REFINE_STEP_DEG) * REFINE_STEP_DEG
         centres = np.unique(np.concatenate([[headings[best]], top_grid, headings[picked]]))
-        pool = _Pool(headings, lengths, counts, coverage)
+        pool = _Pool(headings, lengths, counts, coverage, tied)
         for round_ in range(REFINE_ROUNDS):
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.
             grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
             near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
-            near = np.setdiff1d(np.unique(near), pool.headings)
+            near = np.unique(near)  # sorted; then those not scored yet (np.setdiff1d, cheaper)
+            near = near[np.isin(near, pool.headings, invert=True)]
             near_lengths, near_counts = lengths_of(near) if len(near) else _no_scores(pool)
             pool = pool.extend(near, near_lengths, near_counts, np.full(len(near), np.nan))
             # Coverage for every scored heading that would beat the choice (the shortest
             # headings often trade coverage for length: the constrained optimum sits on the
             # coverage bound), also those a previous round scored for length only.
-            key = _objective_key(pool.lengths, pool.counts, objective)
+            key = _objective_key(pool.tied, pool.counts, objective)
             wanted = np.isnan(pool.coverage) & (key < key[pool.index(chosen[0])])
             if round_ == 0:
                 gap = np.abs((pool.headings[:, None] - top_grid + 90.0) % 180.0 - 90.0)
@@ -296,14 +306,16 @@ def search_headings(
             ok = (pool.counts <= MAX_LINES) & (
                 pool.coverage >= best_coverage - COVERAGE_SLACK - 1e-12
             )
-            i, variant = select_plan(pool.lengths, pool.counts, objective, eligible=ok)
+            i, variant = select_plan(
+                pool.lengths, pool.counts, objective, eligible=ok, tied=pool.tied
+            )
             moved = float(pool.headings[i]) != chosen[0]
             chosen = (float(pool.headings[i]), variant, float(pool.coverage[i]))
             if not moved:
                 break
             centres = np.array([chosen[0]])  # re-centre on a refined winner
     else:
-        pool = _Pool(headings, lengths, counts, coverage)
+        pool = _Pool(headings, lengths, counts, coverage, tied)
     alternatives = _best_covering(pool, objective, chosen[0])
     given_up = max(best_coverage - chosen[2], 0.0) * 100.0
     at = [pool.index(h) for h, _ in alternatives]
@@ -320,7 +332,7 @@ def search_headings(
         alternative_coverage,
         pool.headings,
         np.where(pool.counts <= MAX_LINES, pool.coverage, np.nan),
-        np.argmin(np.round(pool.lengths.total / _TIE_M), axis=1),
+        pool.tied.argmin(axis=1),  # as of the rounded lengths: × _TIE_M keeps their order
     )
 
 
@@ -335,10 +347,8 @@ def _best_covering(
     coverage = np.where(
         (pool.counts <= MAX_LINES) & np.isfinite(pool.coverage), pool.coverage, -np.inf
     )
-    total = np.round(pool.lengths.total / _TIE_M) * _TIE_M
-    order = np.lexsort(
-        (pool.headings, _objective_key(pool.lengths, pool.counts, objective), -coverage)
-    )
+    total = pool.tied
+    order = np.lexsort((pool.headings, _objective_key(total, pool.counts, objective), -coverage))
     picked = _spread(order, pool.headings, np.isfinite(coverage), ALTERNATIVES)
     return tuple((float(pool.headings[i]), int(np.argmin(total[i]))) for i in picked)
 
@@ -358,7 +368,10 @@ def _spread(
         if not ok[i] or len(picked) == k:
             break
         h = heading_of[i]
-        if all(abs((t - h + 90.0) % 180.0 - 90.0) >= _SEED_GAP_DEG for t in taken):
+        for t in taken:  # a loop, not all(...): no generator per candidate
+            if not abs((t - h + 90.0) % 180.0 - 90.0) >= _SEED_GAP_DEG:
+                break
+        else:
             picked.append(i)
             taken.append(h)
     return picked
@@ -372,6 +385,7 @@ class _Pool:
     lengths: VariantLengths
     counts: IntArray
     coverage: FloatArray
+    tied: FloatArray  # tied_lengths(lengths)
 
     def index(self, heading: float) -> int:
         return int(np.nonzero(self.headings == heading)[0][0])
@@ -388,6 +402,7 @@ class _Pool:
             ),
             np.concatenate([self.counts, counts]),
             np.concatenate([self.coverage, coverage]),
+            np.concatenate([self.tied, tied_lengths(lengths)]),
         )
 
 
@@ -397,9 +412,13 @@ def _no_scores(pool: _Pool) -> tuple[VariantLengths, IntArray]:
     return VariantLengths(np.zeros(0), empty, empty), np.zeros(0, dtype=np.int64)
 
 
-def _objective_key(lengths: VariantLengths, counts: IntArray, objective: Objective) -> FloatArray:
-    """Return what the objective minimises per heading: line count and length in one number."""
-    best = np.round(lengths.total.min(axis=1) / _TIE_M) * _TIE_M
+def _objective_key(tied: FloatArray, counts: IntArray, objective: Objective) -> FloatArray:
+    """Return what the objective minimises per heading: line count and length in one number.
+
+    ``tied``: :func:`tied_lengths`; rounding is monotone, so its least per heading is the
+    least length rounded.
+    """
+    best = tied.min(axis=1)
     key = np.where(counts <= MAX_LINES, best, np.inf)
     if objective == "fewest_lines":
         key = key + counts * 1e12
@@ -407,7 +426,7 @@ def _objective_key(lengths: VariantLengths, counts: IntArray, objective: Objecti
 
 
 def _seeds(
-    lengths: VariantLengths,
+    tied: FloatArray,
     counts: IntArray,
     eligible: npt.NDArray[np.bool_],
     headings: FloatArray,
@@ -415,6 +434,6 @@ def _seeds(
     k: int,
 ) -> IntArray:
     """Return the best ``k`` eligible headings by the objective, a seed gap apart."""
-    key = np.where(eligible, _objective_key(lengths, counts, objective), np.inf)
+    key = np.where(eligible, _objective_key(tied, counts, objective), np.inf)
     picked = _spread(np.lexsort((headings, key)), headings, np.isfinite(key), k)
     return np.asarray(picked, dtype=np.int64)

@@ -19,6 +19,7 @@ are integrated exactly, both chains at once. The result is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -29,7 +30,12 @@ FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
 
-def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float) -> FloatArray:
+def convex_coverage(
+    ring_xy: FloatArray,
+    headings_deg: FloatArray,
+    interval_m: float,
+    sweep: tuple[FloatArray, FloatArray] | None = None,
+) -> FloatArray:
     """Coverage ratio of a convex cell's lines at every heading (R2, R3 placement; R4).
 
     Parameters
@@ -40,6 +46,9 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
         Line headings [deg].
     interval_m : float
         Distance between lines and footprint width [m].
+    sweep : (ndarray, ndarray), optional
+        ``to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings_deg[:, None])``, if the caller has
+        it already (the heading search needs the widths too).
 
     Returns
     -------
@@ -59,9 +68,9 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
     n_headings = len(headings)
     m = len(ring_xy)
     x, y = ring_xy[:, 0], ring_xy[:, 1]
-    nxt = np.r_[1:m, 0]
+    nxt = np.arange(1, m + 1) % m  # np.r_ costs more than the rest of this line
     area = 0.5 * float(np.dot(x, y[nxt]) - np.dot(y, x[nxt]))
-    u_ring, v_ring = to_sweep(x, y, headings[:, None])
+    u_ring, v_ring = to_sweep(x, y, headings[:, None]) if sweep is None else sweep
     u_ring = u_ring - u_ring.min(axis=1, keepdims=True)  # every heading's cell starts at 0
     width = u_ring.max(axis=1)
     n = line_counts(width, d)
@@ -70,14 +79,16 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
     # The ring from its leftmost vertex: the lower chain runs left to right, then the upper
     # chain right to left, so each chain's edges come sorted without a sort.
     rows = np.arange(n_headings)[:, None]
-    walk = (np.argmin(u_ring, axis=1)[:, None] + np.arange(m + 1)) % m
+    # Array methods (.argmin, .nonzero, .repeat, .searchsorted) rather than the np.* wrappers:
+    # the wrappers cost more than the work on arrays this small.
+    walk = (u_ring.argmin(axis=1)[:, None] + np.arange(m + 1)) % m
     u_w, v_w = u_ring[rows, walk], v_ring[rows, walk]
     chains = []
     for upper in (False, True):
         ua, ub, va, vb = u_w[:, :-1], u_w[:, 1:], v_w[:, :-1], v_w[:, 1:]
         if upper:
             ua, ub, va, vb = ub[:, ::-1], ua[:, ::-1], vb[:, ::-1], va[:, ::-1]
-        a, e = np.nonzero(ub > ua)
+        a, e = (ub > ua).nonzero()
         ua, ub, va, vb = ua[a, e], ub[a, e], va[a, e], vb[a, e]
         slope = (vb - va) / (ub - ua)
         chains.append(_Chain(a * big + ua, va - slope * ua, slope))
@@ -86,7 +97,7 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
     # Elementary intervals: between consecutive vertices of either chain both are linear.
     cuts = np.sort(u_ring, axis=1)
     x0, x1 = cuts[:, :-1], cuts[:, 1:]
-    ih, col = np.nonzero(x1 > x0)
+    ih, col = (x1 > x0).nonzero()
     x0, x1 = x0[ih, col], x1[ih, col]
     base = ih * big
     mid = base + (x0 + x1) / 2.0
@@ -111,8 +122,13 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
             np.maximum(s_hi, 0.0) + np.maximum(-s_lo, 0.0),  # the half behind
         ]
     )
-    twice = np.r_[0 : len(ih), 0 : len(ih)]
-    kept = _half_strips(h_first[twice], step[twice], count[twice], rates, d)
+    kept = _half_strips(
+        np.concatenate([h_first, h_first]),
+        np.concatenate([step, step]),
+        np.concatenate([count, count]),
+        rates,
+        d,
+    )
     missed = count * d * h_first + d * step * count * (count - 1.0) / 2.0
     missed -= kept[: len(ih)] + kept[len(ih) :]
     excess: FloatArray = np.bincount(ih, missed, minlength=n_headings).astype(float)
@@ -120,10 +136,10 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
     # Strips that hold a vertex (those an interval starts or ends inside), in order: the
     # first strip of interval i, its last, then interval i+1's.
     z_first, z_last = np.floor(x0 / d), np.ceil(x1 / d) - 1.0
-    part_k = np.stack([z_first, z_last], axis=1).ravel()
-    partial = np.stack([z_first < k1, z_last > np.floor(x1 / d) - 1.0], axis=1).ravel()
-    part_h = np.repeat(ih, 2)
-    ok = partial & (part_k >= 0) & (part_k <= np.repeat(last_regular, 2))
+    part_k = _interleave(z_first, z_last)
+    partial = _interleave(z_first < k1, z_last > np.floor(x1 / d) - 1.0)
+    part_h = ih.repeat(2)
+    ok = partial & (part_k >= 0) & (part_k <= last_regular.repeat(2))
     part_h, part_k = part_h[ok], part_k[ok]
     fresh = np.ones(len(part_h), dtype=bool)
     fresh[1:] = (part_h[1:] != part_h[:-1]) | (part_k[1:] != part_k[:-1])
@@ -145,6 +161,13 @@ def convex_coverage(ring_xy: FloatArray, headings_deg: FloatArray, interval_m: f
     return np.asarray(np.clip(1.0 - excess / area, 0.0, 1.0))
 
 
+def _interleave(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[Any]:
+    """``[a0, b0, a1, b1, …]``: ``np.stack([a, b], axis=1).ravel()`` at a third of the cost."""
+    out = np.empty(2 * len(a), dtype=a.dtype)
+    out[0::2], out[1::2] = a, b
+    return out
+
+
 @dataclass(frozen=True, slots=True)
 class _Chain:
     """One chain's edges at every heading, sorted by (heading, left end): ``v = c + s·u``."""
@@ -155,7 +178,7 @@ class _Chain:
 
     def edge_at(self, keys: FloatArray) -> IntArray:
         """Index of the edge holding each query (heading · big + u); sorted queries are fast."""
-        return np.asarray(np.searchsorted(self.keys, keys, side="right") - 1)
+        return np.asarray(self.keys.searchsorted(keys, side="right") - 1)
 
 
 @dataclass(frozen=True, slots=True)
@@ -172,7 +195,7 @@ class _Spans:
 
     def at(self, keys: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Lower and upper chain at ``u`` (queries ``keys`` = heading · big + u)."""
-        i = np.searchsorted(self.keys, keys, side="right") - 1
+        i = self.keys.searchsorted(keys, side="right") - 1
         du = u - self.x0[i]
         return self.lo0[i] + self.s_lo[i] * du, self.hi0[i] + self.s_hi[i] * du
 
@@ -194,21 +217,23 @@ class _Spans:
         cut at the intervals (where a chain has a vertex) and integrated exactly.
         """
         base = zone_h * big
-        lo_a, hi_a = self.at(base + u_a, u_a)
-        lo_b, hi_b = self.at(base + u_b, u_b)
-        bottom, top = np.maximum(lo_a, lo_b), np.minimum(hi_a, hi_b)
-        first = np.searchsorted(self.keys, base + z0, side="right") - 1
-        stop = np.searchsorted(self.keys, base + z1, side="left")
+        k = len(u_a)
+        lo_ab, hi_ab = self.at(np.concatenate([base + u_a, base + u_b]), np.concatenate([u_a, u_b]))
+        bottom, top = np.maximum(lo_ab[:k], lo_ab[k:]), np.minimum(hi_ab[:k], hi_ab[k:])
+        first = self.keys.searchsorted(base + z0, side="right") - 1
+        stop = self.keys.searchsorted(base + z1, side="left")
         count = stop - first
-        z = np.repeat(np.arange(len(z0)), count)
-        i = np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
-        p0 = np.maximum(self.x0[i], z0[z])
+        z = np.arange(len(z0)).repeat(count)
+        i = (first - count.cumsum() + count).repeat(count) + np.arange(int(count.sum()))
+        x0, lo_i, s_lo = self.x0[i], self.lo0[i], self.s_lo[i]  # each gathered once
+        hi_i, s_hi = self.hi0[i], self.s_hi[i]
+        p0 = np.maximum(x0, z0[z])
         p1 = np.minimum(self.x1[i], z1[z])
-        du0, du1 = p0 - self.x0[i], p1 - self.x0[i]
-        lo0 = self.lo0[i] + self.s_lo[i] * du0
-        lo1 = self.lo0[i] + self.s_lo[i] * du1
-        hi0 = self.hi0[i] + self.s_hi[i] * du0
-        hi1 = self.hi0[i] + self.s_hi[i] * du1
+        du0, du1 = p0 - x0, p1 - x0
+        lo0 = lo_i + s_lo * du0
+        lo1 = lo_i + s_lo * du1
+        hi0 = hi_i + s_hi * du0
+        hi1 = hi_i + s_hi * du1
         w = np.maximum(p1 - p0, 0.0)
         cell = w * ((hi0 - lo0) + (hi1 - lo1)) / 2.0
         lost = weight[z] * (cell - _covered_pieces(w, lo0, lo1, hi0, hi1, bottom[z], top[z]))
@@ -276,10 +301,10 @@ def _end_zones(
     their common part is taken back (inclusion–exclusion: the two lines' ends need not
     overlap at a slanted tip). A narrow cell has one strip, its whole width.
     """
-    wide = np.nonzero(~narrow)[0]
+    wide = (~narrow).nonzero()[0]
     nw, ww = n[wide].astype(float), width[wide]
     p_pen, p_last = (nw - 2.0) * d + d / 2.0, ww - d / 2.0
-    thin = np.nonzero(narrow)[0]
+    thin = narrow.nonzero()[0]
     zone_h = np.concatenate([wide, wide, wide, wide, wide, thin])
     start, overlap_end = (nw - 2.0) * d, (nw - 1.0) * d
     z0 = np.concatenate([start, ww - d, ww - d, ww - d, overlap_end, np.zeros(len(thin))])
@@ -288,7 +313,8 @@ def _end_zones(
     u_a = np.concatenate([p_pen, p_pen, p_last, p_pen, p_last, middle])
     u_b = np.concatenate([p_pen, p_pen, p_last, p_last, p_last, middle])
     k = len(wide)
-    weight = np.concatenate([np.ones(3 * k), -np.ones(k), np.ones(k + len(thin))])
+    weight = np.ones(5 * k + len(thin))
+    weight[3 * k : 4 * k] = -1.0
     return zone_h.astype(np.int64), z0, z1, u_a, u_b, weight
 
 
@@ -329,8 +355,11 @@ def _covered_pieces(
     g0 = np.minimum(hi0, b) - np.maximum(lo0, a)
     g3 = np.minimum(hi1, b) - np.maximum(lo1, a)
     g1, g2 = height(t1), height(t2)
-    return np.asarray(
-        _positive_part(t1 * w, g0, g1)
-        + _positive_part((t2 - t1) * w, g1, g2)
-        + _positive_part((1.0 - t2) * w, g2, g3)
+    # The three sub-pieces in one call (fixed numpy cost per call, not per element).
+    n = len(w)
+    parts = _positive_part(
+        np.concatenate([t1 * w, (t2 - t1) * w, (1.0 - t2) * w]),
+        np.concatenate([g0, g1, g2]),
+        np.concatenate([g1, g2, g3]),
     )
+    return np.asarray(parts[:n] + parts[n : 2 * n] + parts[2 * n :])

@@ -306,7 +306,9 @@ def _fit_turns(
         curves = vehicle_turns(ends, vehicle)
     else:
         curves = planned
-    owner = np.repeat(np.arange(len(first)), np.diff(curves.offsets))
+    # Array methods and slices rather than np.repeat/np.diff/…: the wrappers cost more than
+    # the work on a few turns.
+    owner = np.arange(len(first)).repeat(curves.offsets[1:] - curves.offsets[:-1])
     top = up[first]
     pu, pv = curves.xy[:, 0], curves.xy[:, 1]
     hi = np.interp(pu, machine.hi_u, machine.hi_v)
@@ -329,7 +331,8 @@ def _fit_turns(
     np.logical_and.at(fits, owner, ~clash)
     seg_turn, seg_need = _chain_vertices_under(pu, moved, owner, ~top, machine)
     np.logical_and.at(fits, seg_turn, seg_need <= FIT_TOLERANCE_M)
-    xy = np.stack([pu, moved], axis=1)
+    xy = np.empty((len(pu), 2))  # np.stack([pu, moved], axis=1), without stack's cost
+    xy[:, 0], xy[:, 1] = pu, moved
     fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
     return fitted, shift, fits
 
@@ -351,7 +354,7 @@ def _chain_vertices_under(
         How far beyond the chain the curve passes there [m] (negative: inside).
     """
     same = owner[1:] == owner[:-1]
-    i = np.nonzero(same)[0]
+    i = same.nonzero()[0]  # array methods, not the np.* wrappers (as in _fit_turns)
     ua, ub, va, vb = pu[i], pu[i + 1], pv[i], pv[i + 1]
     turn = owner[i]
     at_top = top[turn]
@@ -362,14 +365,14 @@ def _chain_vertices_under(
     cv = np.concatenate([machine.hi_v, machine.lo_v])
     offset = np.where(at_top, 0.0, shift)
     lo_u, hi_u = np.minimum(ua, ub) + offset, np.maximum(ua, ub) + offset
-    first = np.searchsorted(cu, lo_u, side="right")
-    stop = np.searchsorted(cu, hi_u, side="left")
+    first = cu.searchsorted(lo_u, side="right")
+    stop = cu.searchsorted(hi_u, side="left")
     count = np.maximum(stop - first, 0)
     total = int(count.sum())
     if total == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0)
-    step = np.repeat(np.arange(len(count)), count)
-    vertex = np.arange(total) - np.repeat(np.cumsum(count) - count, count) + first[step]
+    step = np.arange(len(count)).repeat(count)
+    vertex = np.arange(total) - (count.cumsum() - count).repeat(count) + first[step]
     a_u, b_u = ua[step] + offset[step], ub[step] + offset[step]
     t = (cu[vertex] - a_u) / np.where(b_u != a_u, b_u - a_u, 1.0)
     curve_v = va[step] + t * (vb[step] - va[step])

@@ -8,7 +8,7 @@ direction and are joined at the ends they share (Vasquez-Gomez et al. 2020).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -33,16 +33,18 @@ class VariantLengths:
         Straight connections between consecutive line ends.
     transit : ndarray, shape (A, 4)
         Start leg plus finish leg (zero where the point is not given).
+    total : ndarray, shape (A, 4)
+        Whole path per heading and variant [m]; summed once, on construction (the heading
+        search reads it several times).
     """
 
     working: FloatArray
     turns: FloatArray
     transit: FloatArray
+    total: FloatArray = field(init=False, repr=False, compare=False)
 
-    @property
-    def total(self) -> FloatArray:
-        """Whole path per heading and variant, shape (A, 4) [m]."""
-        return self.working[:, None] + self.turns + self.transit
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "total", self.working[:, None] + self.turns + self.transit)
 
 
 @dataclass(frozen=True, slots=True)
@@ -182,7 +184,7 @@ def score_headings(
 
     # Every edge not parallel to the lines, both chains at once: group = chain · A + heading,
     # chain 0 the lower (u increasing along the counter-clockwise ring), 1 the upper.
-    a, e = np.nonzero(u2 != u_ring)
+    a, e = (u2 != u_ring).nonzero()  # methods, not np.* wrappers: fixed cost
     ua, ub, va, vb = u_ring[a, e], u2[a, e], v_ring[a, e], v2[a, e]
     group = a + n_headings * (ub < ua)
     slope = (vb - va) / (ub - ua)
@@ -204,7 +206,7 @@ def score_headings(
     even = per_group(evens * step)
     odd = per_group((same - evens) * step)
     # Turns into an edge's first line from the last line of the edge before it.
-    used = np.nonzero(c > 0)[0]
+    used = (c > 0).nonzero()[0]
     order = used[np.lexsort((k1[used], group[used]))]
     follows = group[order[1:]] == group[order[:-1]]
     into, prev = order[1:][follows], order[:-1][follows]
@@ -266,7 +268,7 @@ def combine_variants(
     n_odd = (agg.counts % 2) == 1
     right_up = np.where(n_odd, left_down, left_up)
     right_down = np.where(n_odd, left_up, left_down)
-    turns = np.stack([left_up, left_down, right_up, right_down], axis=1).astype(float)
+    turns = _columns(left_up, left_down, right_up, right_down)
     entry_u, entry_v, exit_u, exit_v = _ends(agg)
     transit = np.zeros(turns.shape)
     theta = np.radians(agg.headings_deg)
@@ -284,13 +286,21 @@ def _ends(agg: HeadingAggregates) -> tuple[FloatArray, FloatArray, FloatArray, F
     u_f, u_l = agg.u_first, agg.u_last
     lo_f, hi_f, lo_l, hi_l = agg.lo_first, agg.hi_first, agg.lo_last, agg.hi_last
     # Variants in VARIANTS order: left_up, left_down, right_up, right_down.
-    entry_u = np.stack([u_f, u_f, u_l, u_l], axis=1)
-    entry_v = np.stack([lo_f, hi_f, lo_l, hi_l], axis=1)
+    entry_u = _columns(u_f, u_f, u_l, u_l)
+    entry_v = _columns(lo_f, hi_f, lo_l, hi_l)
     exit_u = entry_u[:, ::-1]
-    same = np.stack([hi_l, lo_l, hi_f, lo_f], axis=1)  # where each exits if ends_up
-    flipped = np.stack([lo_l, hi_l, lo_f, hi_f], axis=1)
+    same = _columns(hi_l, lo_l, hi_f, lo_f)  # where each exits if ends_up
+    flipped = _columns(lo_l, hi_l, lo_f, hi_f)
     exit_v = np.where(ends_up[:, None], same, flipped)
     return entry_u, entry_v, exit_u, exit_v
+
+
+def _columns(*columns: FloatArray) -> FloatArray:
+    """``np.stack(columns, axis=1)`` as floats, without stack's per-call cost."""
+    out = np.empty((len(columns[0]), len(columns)))
+    for j, column in enumerate(columns):
+        out[:, j] = column
+    return out
 
 
 def variant_ends(

@@ -185,10 +185,10 @@ def plan_coverage(
     def coverage_of(headings: FloatArray) -> FloatArray:
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
-        u_ring, _ = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
-        widths = np.ptp(u_ring, axis=1)
+        sweep = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])  # rotated once
+        widths = np.ptp(sweep[0], axis=1)
         loss = fitting_loss_m2(machine, interval, line_counts(widths, interval), widths) / field_m2
-        return convex_coverage(ring_xy, headings, interval) - loss
+        return convex_coverage(ring_xy, headings, interval, sweep) - loss
 
     choice = angles.search_headings(
         lengths_of, coverage_of, headings, goal, interval_m=interval, refine=fixed_heading is None
@@ -316,11 +316,22 @@ def _assemble(
     y = np.fromiter(route.y, dtype=float, count=len(route.y))
     if route.segments and route.roles[-1] == "finish":
         route.segments.append(("transit", None, len(x) - 2, len(x) - 1))
-    lon, lat = frame.to_lonlat_xy(x, y)
+    # The waypoints and the cells' vertices in one projection: one pyproj call, not one per
+    # geometry (the fixed cost of a call is most of a small plan's).
+    cells = np.empty(len(cells_local), dtype=object)
+    cells[:] = cells_local
+    cell_xy = shapely.get_coordinates(cells)
+    lon_all, lat_all = frame.to_lonlat_xy(
+        np.concatenate([x, cell_xy[:, 0]]), np.concatenate([y, cell_xy[:, 1]])
+    )
+    lon, lat = lon_all[: len(x)], lat_all[: len(x)]
+    cells_lonlat = shapely.set_coordinates(
+        cells, np.stack([lon_all[len(x) :], lat_all[len(x) :]], axis=1)
+    )
     lon_list = np.round(lon, LONLAT_DECIMALS).tolist()
     lat_list = np.round(lat, LONLAT_DECIMALS).tolist()
     waypoints = Waypoints(lon_list, lat_list, route.roles, route.lines)
-    step = np.hypot(np.diff(x), np.diff(y))
+    step = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # np.diff, without its wrapper's cost
     distance = np.concatenate(([0.0], np.cumsum(step)))
     # Length per kind of segment: each segment runs from its first waypoint to its last.
     kind_codes = {kind: k for k, kind in enumerate(_LENGTH_KINDS)}
@@ -361,7 +372,7 @@ def _assemble(
         segments=segments,
         stats=stats,
         interval_m=interval_m,
-        cells_lonlat=tuple(frame.to_lonlat(cell) for cell in cells_local),
+        cells_lonlat=tuple(cells_lonlat.tolist()),
         vehicle=vehicle,
         implement_width_m=implement_width_m,
     )

@@ -50,6 +50,7 @@ DUBINS_WORDS: dict[str, tuple[int, int, int]] = {
 }
 BULB_WORDS = ("RLR", "LRL")
 _TWO_PI = 2.0 * math.pi
+_FLOAT_MAX = float(np.finfo(np.float64).max)
 
 
 @dataclass(frozen=True, slots=True)
@@ -265,9 +266,9 @@ def dubins_words(
     sa, sb, ca, cb = np.sin(a), np.sin(b), np.cos(a), np.cos(b)
     c_ab = np.cos(a - b)
     dd = d * d
-    candidates: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+    tpq = np.empty((len(words), 3, len(d)))  # (words, 3, T); NaN where a word has no path
     with np.errstate(invalid="ignore"):
-        for word in words:
+        for w, word in enumerate(words):
             if word == "LSL":
                 p_sq = 2.0 + dd - 2.0 * c_ab + 2.0 * d * (sa - sb)
                 tmp = np.arctan2(cb - ca, d + sa - sb)
@@ -298,9 +299,10 @@ def dubins_words(
                 q = b - a - t + p
             else:
                 raise ValueError(f"unknown Dubins word {word!r}")
-            candidates.append((_mod2pi(t), p, _mod2pi(q)))
-    tpq = np.array(candidates)  # (words, 3, T); NaN where a word has no path
-    total = np.nan_to_num(tpq.sum(axis=1), nan=np.inf)
+            tpq[w, 0], tpq[w, 1], tpq[w, 2] = _mod2pi(t), p, _mod2pi(q)
+    # np.nan_to_num(sums, nan=np.inf) without its Python-level cost (±inf to ±max, as it does).
+    sums = tpq.sum(axis=1)
+    total = np.where(np.isnan(sums), np.inf, np.clip(sums, -_FLOAT_MAX, _FLOAT_MAX))
     if not np.isfinite(total).any(axis=0).all():
         raise ValueError("no Dubins word joins these poses")  # only if ``words`` is narrowed
     best = np.argmin(total, axis=0)
@@ -343,8 +345,8 @@ def _sample(
         seg_x[:, s], seg_y[:, s], seg_yaw[:, s] = x, y, yaw
         x, y, yaw = _advance(x, y, yaw, signs[:, s], lengths[:, s], radius_m)
     flat = pieces.ravel()
-    seg = np.repeat(np.arange(n * m), flat)
-    within = np.arange(flat.sum()) - np.repeat(np.cumsum(flat) - flat, flat)
+    seg = np.arange(n * m).repeat(flat)  # array methods: the np.* wrappers cost more here
+    within = np.arange(flat.sum()) - (flat.cumsum() - flat).repeat(flat)
     frac = (within + 1) / flat[seg]
     px, py, _ = _advance(
         seg_x.ravel()[seg],
@@ -355,7 +357,7 @@ def _sample(
         radius_m,
     )
     per_turn = pieces.sum(axis=1) + 1
-    offsets = np.concatenate(([0], np.cumsum(per_turn))).astype(np.int64)
+    offsets = np.concatenate(([0], per_turn.cumsum())).astype(np.int64)
     xy = np.empty((offsets[-1], 2))
     first = offsets[:-1]
     xy[first, 0], xy[first, 1] = ends.x0, ends.y0
@@ -404,14 +406,14 @@ def driving_time_s(
     ...                      speed_mps=0.56, turn_rate_dps=45.0), 2)   # two right angles
     46.86
     """
-    dx, dy = np.diff(x), np.diff(y)
+    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]  # np.diff, without its wrapper's cost
     step = np.hypot(dx, dy)
     moving = step > 1e-9
     if not moving.any():
         return 0.0
     step = step[moving]
     heading = np.arctan2(dy[moving], dx[moving])
-    change = np.abs((np.diff(heading) + np.pi) % (2.0 * np.pi) - np.pi)
+    change = np.abs((heading[1:] - heading[:-1] + np.pi) % (2.0 * np.pi) - np.pi)
     rate = math.radians(turn_rate_dps)
     on_arc = (step[:-1] <= STEP_M + 1e-9) & (step[1:] <= STEP_M + 1e-9)
     share = np.zeros(len(step))

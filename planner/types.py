@@ -112,7 +112,7 @@ class Waypoint:
 class _MadeOnAccess(Sequence[_Item]):
     """A sequence whose items are made when they are read, from columns a subclass holds.
 
-    Subclasses give :meth:`__len__`, :meth:`_item` (make item ``i``) and :meth:`_columns`
+    Subclasses give :meth:`__len__`, :meth:`_item` (make item ``i``) and :meth:`columns`
     (what it holds, for equality and pickling); reading by index, slice or iteration,
     comparing with any sequence of the same items, hashing and printing come from here.
     """
@@ -122,7 +122,8 @@ class _MadeOnAccess(Sequence[_Item]):
     def _item(self, i: int) -> _Item:
         raise NotImplementedError
 
-    def _columns(self) -> tuple[Any, ...]:
+    def columns(self) -> tuple[Any, ...]:
+        """Return what the sequence holds, its items made from it (do not modify it)."""
         raise NotImplementedError
 
     @overload
@@ -150,7 +151,7 @@ class _MadeOnAccess(Sequence[_Item]):
         """Equal to any sequence of the same items."""
         if type(other) is type(self):
             assert isinstance(other, _MadeOnAccess)
-            if self._columns() == other._columns():
+            if self.columns() == other.columns():
                 return True  # the same columns make the same items, without making them
         if isinstance(other, Sequence) and not isinstance(other, str | bytes):
             return len(other) == len(self) and all(a == b for a, b in zip(self, other, strict=True))
@@ -166,7 +167,7 @@ class _MadeOnAccess(Sequence[_Item]):
 
     def __reduce__(self) -> tuple[Any, ...]:
         """Pickle the columns (plans cross process boundaries in batch planning)."""
-        return (type(self), self._columns())
+        return (type(self), self.columns())
 
 
 class Waypoints(_MadeOnAccess[Waypoint]):
@@ -213,13 +214,17 @@ class Waypoints(_MadeOnAccess[Waypoint]):
     def _item(self, i: int) -> Waypoint:
         return Waypoint(i, self._lon[i], self._lat[i], self._roles[i], self._lines[i])
 
-    def _columns(self) -> tuple[Any, ...]:
-        return (self._lon, self._lat, self._roles, self._lines)
-
     def __iter__(self) -> Iterator[Waypoint]:
         """Make the waypoints in order (all at once: the export of a large plan reads all)."""
         columns = (range(len(self)), self._lon, self._lat, self._roles, self._lines)
         return itertools.starmap(Waypoint, zip(*columns, strict=True))
+
+    def columns(self) -> tuple[list[float], list[float], list[WaypointRole], list[int | None]]:
+        """Return the columns ``(lon, lat, roles, lines)`` as held (do not modify them).
+
+        For writers that need every waypoint's fields (GeoJSON): no :class:`Waypoint` made.
+        """
+        return self._lon, self._lat, self._roles, self._lines
 
 
 @dataclass(frozen=True, slots=True)
@@ -279,8 +284,11 @@ class PathSegments(_MadeOnAccess[PathSegment]):
         points = zip(self._lon[first : last + 1], self._lat[first : last + 1], strict=True)
         return PathSegment(kind, line, tuple(points))
 
-    def _columns(self) -> tuple[Any, ...]:
-        return (self._lon, self._lat, self._bounds)
+    def columns(
+        self,
+    ) -> tuple[list[float], list[float], list[tuple[SegmentKind, int | None, int, int]]]:
+        """Return ``(lon, lat, bounds)`` as held: each segment is ``(kind, index, first, last)``."""
+        return self._lon, self._lat, self._bounds
 
 
 @dataclass(frozen=True, slots=True)

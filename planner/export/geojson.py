@@ -10,14 +10,22 @@ leaving it out keeps the file the same byte for byte for the same request (R7).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from shapely import Polygon
 
 from planner.errors import InvalidFieldError
 from planner.fields import parse_field_geojson
-from planner.types import CoveragePlan, PathSegment, PlanStats, Vehicle, Waypoint
+from planner.types import (
+    CoveragePlan,
+    PathSegment,
+    PathSegments,
+    PlanStats,
+    Vehicle,
+    Waypoint,
+    Waypoints,
+)
 
 _ROLES = {"start", "line_start", "line_end", "turn", "headland", "finish"}
 _SEGMENT_KINDS = ("transit", "line", "turn", "headland", "round")
@@ -35,21 +43,23 @@ def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str,
     features: list[dict[str, Any]] = [_feature(_polygon(plan.field_lonlat), {"kind": "field"})]
     for index, cell in enumerate(plan.cells_lonlat):
         features.append(_feature(_polygon(cell), {"kind": "cell", "index": index}))
-    for segment in plan.segments:
-        line = {"type": "LineString", "coordinates": [list(p) for p in segment.lonlat]}
-        properties: dict[str, Any] = {"kind": segment.kind}
-        if segment.kind in ("line", "headland", "round"):
-            properties["index"] = segment.index
+    for kind, segment_index, coordinates in _segments(plan.segments):
+        line = {"type": "LineString", "coordinates": coordinates}
+        properties: dict[str, Any] = {"kind": kind}
+        if kind in ("line", "headland", "round"):
+            properties["index"] = segment_index
         features.append(_feature(line, properties))
-    if len(plan.waypoints) >= 2:
-        path = [[w.lon, w.lat] for w in plan.waypoints]
+    seq, lon, lat, roles, lines = _waypoint_columns(plan.waypoints)
+    if len(lon) >= 2:
+        path = [[x, y] for x, y in zip(lon, lat, strict=True)]
         features.append(_feature({"type": "LineString", "coordinates": path}, {"kind": "path"}))
     features.extend(
-        _feature(
-            {"type": "Point", "coordinates": [w.lon, w.lat]},
-            {"kind": "waypoint", "seq": w.seq, "role": w.role, "line": w.line},
-        )
-        for w in plan.waypoints
+        {
+            "type": "Feature",
+            "properties": {"kind": "waypoint", "seq": i, "role": role, "line": line},
+            "geometry": {"type": "Point", "coordinates": [x, y]},
+        }
+        for i, x, y, role, line in zip(seq, lon, lat, roles, lines, strict=True)
     )
     stats = plan.stats.as_dict()
     del stats["planning_ms"]
@@ -128,6 +138,35 @@ def _vehicle(value: Any) -> Vehicle | None:
         return Vehicle(**{f: value[f] for f in Vehicle.__slots__})
     except (KeyError, TypeError):
         return None
+
+
+def _segments(segments: Sequence[PathSegment]) -> Iterator[tuple[str, int | None, list[Any]]]:
+    """Each segment's kind, index and ``[lon, lat]`` lists, from the columns if it has them."""
+    if isinstance(segments, PathSegments):  # no PathSegment (tuple of tuples) made per segment
+        lon, lat, bounds = segments.columns()
+        for kind, index, first, last in bounds:
+            stop = last + 1
+            coordinates = [[x, y] for x, y in zip(lon[first:stop], lat[first:stop], strict=True)]
+            yield kind, index, coordinates
+        return
+    for segment in segments:
+        yield segment.kind, segment.index, [list(p) for p in segment.lonlat]
+
+
+def _waypoint_columns(
+    waypoints: Sequence[Waypoint],
+) -> tuple[Sequence[int], list[float], list[float], Sequence[str], list[int | None]]:
+    """``(seq, lon, lat, role, line)`` of every waypoint, from the columns if it has them."""
+    if isinstance(waypoints, Waypoints):  # no Waypoint made per point
+        lon, lat, roles, lines = waypoints.columns()
+        return range(len(lon)), lon, lat, roles, lines
+    return (
+        [w.seq for w in waypoints],
+        [w.lon for w in waypoints],
+        [w.lat for w in waypoints],
+        [w.role for w in waypoints],
+        [w.line for w in waypoints],
+    )
 
 
 def _feature(geometry: dict[str, Any], properties: dict[str, Any]) -> dict[str, Any]:
