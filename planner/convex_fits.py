@@ -45,7 +45,13 @@ class _Placed:
     v_end: FloatArray
     index: IntArray
     machine: Chains
-    width_m: float  # the field's width across the lines
+    field_u: FloatArray  # the field's ring in the same frame
+    field_v: FloatArray
+
+    @property
+    def width_m(self) -> float:
+        """The field's width across the lines [m]."""
+        return float(self.field_u.max() - self.field_u.min())
 
 
 def convex_lines(
@@ -122,7 +128,6 @@ def fit_headings(
     """
     if area is None:
         area = convex_machine_area(field_local, vehicle)
-    ring = np.asarray(field_local.exterior.coords)[:-1]
     placed = [
         _place(field_local, area, float(h), interval_m, vehicle, pattern, int(k))
         for h, k in zip(headings_deg, variants, strict=True)
@@ -137,11 +142,10 @@ def fit_headings(
     # What each heading's fitted lines cover: the field's chains in every heading's frame,
     # measured together (covered_each_cell), lines left to right.
     chains, u, lo, hi, sizes = [], [], [], [], [0]
-    for heading, fit in zip(headings_deg, fits, strict=True):
+    for lines, fit in zip(placed, fits, strict=True):
         if isinstance(fit, InvalidParameterError):
             continue
-        u_ring, v_ring = to_sweep(ring[:, 0], ring[:, 1], float(heading))
-        chains.append(convex_chains(u_ring, v_ring))
+        chains.append(convex_chains(lines.field_u, lines.field_v))
         order = np.argsort(fit.index, kind="stable")
         a, b = fit.v_start[order], fit.v_end[order]
         u.append(fit.u[order])
@@ -185,7 +189,7 @@ def _place(
     mu, mv = to_sweep(ring[:, 0], ring[:, 1], heading_deg)
     machine = convex_chains(mu, mv)
     outer = np.asarray(field_local.exterior.coords)[:-1]
-    fu, _ = to_sweep(outer[:, 0], outer[:, 1], heading_deg)
+    fu, fv = to_sweep(outer[:, 0], outer[:, 1], heading_deg)
     u_min, u_max = float(fu.min()), float(fu.max())
     skip = snake_skip(vehicle, d) if pattern == "snake" else 1
     spacings = tuple(d * k for k in range(1, skip + 1))
@@ -207,9 +211,7 @@ def _place(
     else:
         index, up = order_boustrophedon(n, variant)
     lo, hi = v_lo[index], v_hi[index]
-    return _Placed(
-        u[index], np.where(up, lo, hi), np.where(up, hi, lo), index, machine, u_max - u_min
-    )
+    return _Placed(u[index], np.where(up, lo, hi), np.where(up, hi, lo), index, machine, fu, fv)
 
 
 def _fit(
