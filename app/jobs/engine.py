@@ -41,16 +41,24 @@ def start_local_cluster(n_workers: int) -> LocalCluster:
     No dashboard (it would need bokeh); the scheduler's small HTTP server (health, metrics)
     listens on a free loopback port rather than 8787, which another cluster may hold. Worker
     logs at warning level.
+
+    Dask's statistical profiler is off in the workers: it samples every worker 100 times a
+    second and keeps an hour of call trees, which nothing here reads (there is no dashboard).
+    With it on, each worker of a 100,000-field ``plan-batch`` grew by about 10 MiB per 1,000
+    fields, and an idle worker spent 0.07 s of CPU a second instead of 0.04 s.
     """
+    import dask
     from distributed import LocalCluster
 
-    return LocalCluster(
-        n_workers=n_workers,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address="127.0.0.1:0",
-        silence_logs=logging.WARNING,
-    )
+    # The nannies copy the configuration when they are made: their workers inherit it.
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        return LocalCluster(
+            n_workers=n_workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address="127.0.0.1:0",
+            silence_logs=logging.WARNING,
+        )
 
 
 class JobEngine:

@@ -27,8 +27,10 @@ from tests.databases import DATABASES, scratch_pg_database
 ROOT = Path(__file__).resolve().parents[2]
 ANSWER_WITHIN_S = 2.0
 HEALTH_WITHIN_S = 1.0
-#: The served app's planning budget: well inside ANSWER_WITHIN_S, for a busy machine.
-BUDGET = {"TILLPATH_PLANNING_BUDGET_S": "1"}
+#: The served app's planning budget: a quarter of ANSWER_WITHIN_S, so that a loaded machine
+#: (a load average of 17 once took the answer past 2 s with a 1 s budget) still answers in time.
+PLANNING_BUDGET_S = 0.5
+BUDGET = {"TILLPATH_PLANNING_BUDGET_S": str(PLANNING_BUDGET_S)}
 
 
 @pytest.fixture(scope="module", params=DATABASES)
@@ -130,7 +132,7 @@ def test_comb_shaped_field_is_answered_within_the_budget(served: ServerUrl):
     assert seconds < ANSWER_WITHIN_S, seconds
     assert max(health) < HEALTH_WITHIN_S, health
     if response.status_code == 422:  # planned within the budget is fine too (a faster planner)
-        assert "limit of 1 s per request" in response.json()["detail"]
+        assert f"limit of {PLANNING_BUDGET_S:g} s per request" in response.json()["detail"]
         assert "1,998 vertices" in response.json()["detail"]
     else:
         assert response.status_code == 200, response.text

@@ -163,6 +163,16 @@ def test_run_batch_streams_many_fields_on_a_cluster(tmp_path: Path, dask_schedul
     _geoms, data = read_layer(out, "fields")
     assert sorted(data["field_index"]) == list(range(2500))
     assert all(n >= 1 for n in data["line_count"])
+    # Dask's profiler is off in the workers: it kept an hour of call trees, ~10 MiB a worker
+    # per 1,000 fields, so a long batch's memory grew with its length.
+    from distributed import Client
+
+    with Client(dask_scheduler, set_as_default=False) as client:
+        profiles = client.run(
+            lambda dask_worker: (len(dask_worker.profile_history), dask_worker.profile_recent)
+        )
+    for history, recent in profiles.values():
+        assert history == 0 and recent["count"] == 0, (history, recent["count"])
 
 
 def test_unreadable_input_and_bad_output_are_errors_with_status_2(tmp_path: Path) -> None:
