@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from navigation.compass import compass_heading_deg, magnetic_declination_deg
-from navigation.consistency import chi2_mean_bounds
+from navigation.consistency import chi2_mean_bounds, normalised_squares
 from navigation.filters import PoseFilter, augmented_x0
 from navigation.guidance import pure_pursuit_command, segment_progress, waypoint_command
 from navigation.metrics import TrackMetrics, line_waypoints, optional_tuple, score_track
@@ -307,9 +307,11 @@ def simulate(
             np.diag([gps_sigma**2, gps_sigma**2, compass_sigma**2]),
             params=config.kalman,
         )
-    nees: list[float] = []
-    nis: list[float] = []
-    nis_dof: list[int] = []
+    # NEES and NIS samples, solved in one batch after the run.
+    nees_err: list[tuple[float, float]] = []
+    nees_cov: list[FloatArray] = []
+    nis_y: list[FloatArray] = []
+    nis_s: list[FloatArray] = []
     ex, ey, eh = fix.x_m, fix.y_m, heading_meas
     gps_period = 1.0 / gps_model.rate_hz
     compass_period = 1.0 / comp.rate_hz
@@ -387,13 +389,13 @@ def simulate(
                 kf.update(gps_xy_m=(fix.x_m, fix.y_m), gps_sigma_m=gps_sigma)
             sum_sin = sum_cos = 0.0
             n_compass = 0
-            ex, ey, eh = (float(v) for v in kf.ekf.x[:3])
+            ex, ey, eh = kf.pose
             # Consistency: the position error against the filter's own covariance.
-            err = np.array([ex - state.x_m, ey - state.y_m])
-            nees.append(float(err @ np.linalg.solve(kf.P[:2, :2], err)))
-            if kf.nis is not None:
-                nis.append(kf.nis)
-                nis_dof.append(kf.nis_dof)
+            nees_err.append((ex - state.x_m, ey - state.y_m))
+            nees_cov.append(kf.P[:2, :2])
+            if kf.innovation is not None:
+                nis_y.append(kf.innovation[0])
+                nis_s.append(kf.innovation[1])
 
         # Guide: advance past reached waypoints, then steer to the current one.
         clutch = STRAIGHT
@@ -491,13 +493,16 @@ def simulate(
         est_max, est_mean = float(finite.max()), float(finite.mean())
         on_lines = est_wp_err[line_waypoints(plan) & np.isfinite(est_wp_err)]
         line_est_max = float(on_lines.max()) if len(on_lines) else None
-    nees_mean = float(np.mean(nees)) if nees else None
-    nis_mean = float(np.mean(nis)) if nis else None
+    nees = normalised_squares(nees_err, nees_cov)
+    nis = normalised_squares(nis_y, nis_s)
+    nis_dof = [len(y) for y in nis_y]
+    nees_mean = float(np.mean(nees)) if len(nees) else None
+    nis_mean = float(np.mean(nis)) if len(nis) else None
     # NEES samples of one run are correlated in time (the wander lasts a minute), so one run
     # counts as one sample of its time average: the bounds are those of one 2-dof χ² draw.
     # Innovations of a consistent filter are white, so every update counts for the NIS.
     nees_bounds = chi2_mean_bounds(2, 1)
-    nis_bounds = chi2_mean_bounds(round(np.mean(nis_dof)), len(nis)) if nis else None
+    nis_bounds = chi2_mean_bounds(round(np.mean(nis_dof)), len(nis)) if len(nis) else None
     metrics = dataclasses.replace(
         metrics,
         filter_rms_m=float(np.sqrt(np.mean((ex_a - tx) ** 2 + (ey_a - ty) ** 2))),
