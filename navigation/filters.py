@@ -241,9 +241,10 @@ class PoseFilter:
         self.params = params
         self.gps = gps
         self.augmented = dim == 6
-        #: Normalised innovation squared of the last update, and its degrees of freedom.
-        self.nis: float | None = None
+        #: Degrees of freedom of the last update's innovation (0 before any).
         self.nis_dof = 0
+        self._innovation: tuple[FloatArray, FloatArray] | None = None
+        self._identity = np.eye(dim)
         self._matrices: dict[tuple[str | float, ...], FloatArray] = {}
         self._reset_interval()
 
@@ -268,7 +269,7 @@ class PoseFilter:
         return matrix
 
     def _reset_interval(self) -> None:
-        self._x = [float(v) for v in self.ekf.x[:3]]
+        self._x = self.ekf.x[:3].tolist()
         self._f02 = 0.0  # chained Jacobian: [[1, 0, f02], [0, 1, f12], [0, 0, 1]]
         self._f12 = 0.0
         self._elapsed_s = 0.0
@@ -282,9 +283,30 @@ class PoseFilter:
         return np.concatenate([self._x, self.ekf.x[3:]])
 
     @property
+    def pose(self) -> tuple[float, float, float]:
+        """The current ``(x, y, θ)`` as floats, as :meth:`propagate` returns it."""
+        return self._x[0], self._x[1], self._x[2]
+
+    @property
     def P(self) -> FloatArray:  # noqa: N802 (filterpy's names)
         """The covariance after the last update."""
         return self.ekf.P  # type: ignore[no-any-return]
+
+    @property
+    def innovation(self) -> tuple[FloatArray, FloatArray] | None:
+        """The last update's innovation ``y`` and its covariance ``S`` (None before any).
+
+        For batching the NIS of a run (:func:`navigation.consistency.normalised_squares`).
+        """
+        return self._innovation
+
+    @property
+    def nis(self) -> float | None:
+        """Normalised innovation squared of the last update (None before any)."""
+        if self._innovation is None:
+            return None
+        y, S = self._innovation
+        return float(y @ np.linalg.solve(S, y))
 
     def propagate(
         self, v_mps: float, omega_rad_s: float, dt_s: float
@@ -338,7 +360,7 @@ class PoseFilter:
         """
         ekf = self.ekf
         if self._elapsed_s > 0.0:
-            F = np.eye(ekf.dim_x)
+            F = self._identity.copy()
             F[0, 2] = self._f02
             F[1, 2] = self._f12
             x_pred = np.array(ekf.x, dtype=float)
@@ -380,9 +402,9 @@ class PoseFilter:
                 residual=residual_heading,
             )
         if gps_xy_m is not None or heading_rad is not None:
+            # Kept, not solved: the simulator batches a run's NIS at its end.
             y = np.atleast_1d(np.asarray(ekf.y, dtype=float))
-            S = np.atleast_2d(np.asarray(ekf.S, dtype=float))
-            self.nis = float(y @ np.linalg.solve(S, y))
+            self._innovation = (y, np.atleast_2d(np.asarray(ekf.S, dtype=float)))
             self.nis_dof = len(y)
         ekf.x[2] = ekf.x[2] % (2.0 * math.pi)
         self._reset_interval()

@@ -114,9 +114,50 @@ def waypoint_command(
     -------
     SteerCommand
     """
-    distance = haversine_m(lon, lat, target_lon, target_lat)
-    error = heading_error_deg(bearing_deg(lon, lat, target_lon, target_lat), heading_deg)
-    return SteerCommand(clutch_for(error, tolerance_deg=tolerance_deg), error, distance)
+    return SteerCommand(
+        *waypoint_law(lon, lat, heading_deg, target_lon, target_lat, tolerance_deg=tolerance_deg)
+    )
+
+
+def waypoint_law(
+    lon: float,
+    lat: float,
+    heading_deg: float,
+    target_lon: float,
+    target_lat: float,
+    *,
+    tolerance_deg: float,
+) -> tuple[int, float, float]:
+    """:func:`waypoint_command` as ``(clutch, heading_error_deg, distance_m)``, for the 10 Hz loop.
+
+    :func:`haversine_m` and :func:`bearing_deg` written out together: they share the
+    latitudes' radians and cosines, and the floats are theirs exactly (same operations in
+    the same order).
+
+    Examples
+    --------
+    >>> clutch, error, distance = waypoint_law(0.0, 0.0, 0.0, 0.001, 0.0, tolerance_deg=8.0)
+    >>> clutch, round(error, 6), round(distance, 1)     # due east: turn right
+    (1, 90.0, 111.2)
+    """
+    phi1 = math.radians(lat)
+    phi2 = math.radians(target_lat)
+    dlmb = math.radians(target_lon - lon)
+    cos1 = math.cos(phi1)
+    cos2 = math.cos(phi2)
+    a = math.sin(0.5 * (phi2 - phi1)) ** 2 + cos1 * cos2 * math.sin(0.5 * dlmb) ** 2
+    distance = 2.0 * EARTH_RADIUS_M * math.atan2(math.sqrt(a), math.sqrt(1.0 - a))
+    x = cos2 * math.sin(dlmb)
+    y = cos1 * math.sin(phi2) - math.sin(phi1) * cos2 * math.cos(dlmb)
+    bearing = math.degrees(math.atan2(x, y)) % 360.0
+    error = (bearing - heading_deg + 180.0) % 360.0 - 180.0
+    if error > tolerance_deg:
+        clutch = RIGHT
+    elif error < -tolerance_deg:
+        clutch = LEFT
+    else:
+        clutch = STRAIGHT
+    return clutch, error, distance
 
 
 def segment_progress(
@@ -131,16 +172,69 @@ def segment_progress(
     >>> segment_progress(1.0, 2.0, 0.0, 0.0, 0.0, 10.0)
     (2.0, 1.0, 10.0)
     """
+    ux, uy, length = segment_axes(ax_m, ay_m, bx_m, by_m)
+    if length == 0.0:
+        return 0.0, 0.0, 0.0
+    px = x_m - ax_m
+    py = y_m - ay_m
+    return px * ux + py * uy, px * uy - py * ux, length
+
+
+def segment_axes(ax_m: float, ay_m: float, bx_m: float, by_m: float) -> tuple[float, float, float]:
+    """Return the unit direction ``(ux, uy)`` and length [m] of A→B; ``(0, 0, 0)`` if none.
+
+    A leg's constants, computed once per leg by the 10 Hz loop: the along-track distance of
+    ``(x, y)`` is then ``(x - ax) * ux + (y - ay) * uy``, as :func:`segment_progress` has it.
+
+    Examples
+    --------
+    >>> segment_axes(0.0, 0.0, 3.0, 4.0)
+    (0.6, 0.8, 5.0)
+    """
     dx = bx_m - ax_m
     dy = by_m - ay_m
     length = math.hypot(dx, dy)
     if length == 0.0:
         return 0.0, 0.0, 0.0
-    ux = dx / length
-    uy = dy / length
-    px = x_m - ax_m
-    py = y_m - ay_m
-    return px * ux + py * uy, px * uy - py * ux, length
+    return dx / length, dy / length, length
+
+
+def pursuit_law(
+    x_m: float,
+    y_m: float,
+    heading_rad: float,
+    ax_m: float,
+    ay_m: float,
+    bx_m: float,
+    by_m: float,
+    along_m: float,
+    length_m: float,
+    *,
+    lookahead_m: float,
+    tolerance_deg: float,
+) -> tuple[int, float, float]:
+    """:func:`pure_pursuit_command` as ``(clutch, heading_error_deg, distance_m)``.
+
+    Given the along-track distance and the segment's length (:func:`segment_progress`), which
+    the 10 Hz loop has already computed for the waypoint test.
+
+    Examples
+    --------
+    >>> clutch, error, distance = pursuit_law(1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 10.0, 0.0, 10.0,
+    ...                                       lookahead_m=2.0, tolerance_deg=3.0)
+    >>> clutch, round(error, 1), round(distance, 3)
+    (-1, -26.6, 10.05)
+    """
+    if length_m == 0.0:
+        aim_x, aim_y = bx_m, by_m
+    else:
+        s = min(max(along_m, 0.0) + lookahead_m, length_m) / length_m
+        aim_x = ax_m + s * (bx_m - ax_m)
+        aim_y = ay_m + s * (by_m - ay_m)
+    target_deg = math.degrees(math.atan2(aim_x - x_m, aim_y - y_m))
+    error = heading_error_deg(target_deg, math.degrees(heading_rad))
+    distance = math.hypot(bx_m - x_m, by_m - y_m)
+    return clutch_for(error, tolerance_deg=tolerance_deg), error, distance
 
 
 def pure_pursuit_command(
@@ -185,13 +279,18 @@ def pure_pursuit_command(
     (-1, -26.6)
     """
     along, _, length = segment_progress(x_m, y_m, ax_m, ay_m, bx_m, by_m)
-    if length == 0.0:
-        aim_x, aim_y = bx_m, by_m
-    else:
-        s = min(max(along, 0.0) + lookahead_m, length) / length
-        aim_x = ax_m + s * (bx_m - ax_m)
-        aim_y = ay_m + s * (by_m - ay_m)
-    target_deg = math.degrees(math.atan2(aim_x - x_m, aim_y - y_m))
-    error = heading_error_deg(target_deg, math.degrees(heading_rad))
-    distance = math.hypot(bx_m - x_m, by_m - y_m)
-    return SteerCommand(clutch_for(error, tolerance_deg=tolerance_deg), error, distance)
+    return SteerCommand(
+        *pursuit_law(
+            x_m,
+            y_m,
+            heading_rad,
+            ax_m,
+            ay_m,
+            bx_m,
+            by_m,
+            along,
+            length,
+            lookahead_m=lookahead_m,
+            tolerance_deg=tolerance_deg,
+        )
+    )

@@ -79,15 +79,15 @@ class GpsReceiver:
 
     def read(self, state: VehicleState, time_s: float) -> GpsFix:
         """Return the next fix for the true ``state``; advances the wander by one period."""
-        w = self.rng.standard_normal(4)
-        self.bias_x_m = self._phi * self.bias_x_m + self._drive * w[0]
-        self.bias_y_m = self._phi * self.bias_y_m + self._drive * w[1]
+        return GpsFix(time_s, *self.read_xy(state.x_m, state.y_m))
+
+    def read_xy(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """:meth:`read` for the true position ``(x_m, y_m)``: the fix's ``(x, y)`` [m]."""
+        w0, w1, w2, w3 = self.rng.standard_normal(4).tolist()
+        self.bias_x_m = self._phi * self.bias_x_m + self._drive * w0
+        self.bias_y_m = self._phi * self.bias_y_m + self._drive * w1
         white = self.params.white_sigma_m
-        return GpsFix(
-            time_s,
-            state.x_m + self.bias_x_m + white * w[2],
-            state.y_m + self.bias_y_m + white * w[3],
-        )
+        return x_m + self.bias_x_m + white * w2, y_m + self.bias_y_m + white * w3
 
 
 def read_compass(
@@ -116,14 +116,28 @@ def read_compass(
     params : CompassParams
         Noise and bias.
     """
+    mag_x, mag_y = read_magnetometer(
+        state.heading_rad, rng, declination_deg=declination_deg, params=params
+    )
+    return CompassReading(time_s, mag_x, mag_y)
+
+
+def read_magnetometer(
+    heading_rad: float,
+    rng: np.random.Generator,
+    *,
+    declination_deg: float,
+    params: CompassParams,
+) -> tuple[float, float]:
+    """:func:`read_compass` for the true heading [rad]: ``(mag_x, mag_y)``, for the 10 Hz loop."""
     magnetic_deg = (
-        math.degrees(state.heading_rad)
+        math.degrees(heading_rad)
         - declination_deg
         + params.bias_deg
         + params.noise_deg * rng.standard_normal()
     )
     rad = math.radians(magnetic_deg)
-    return CompassReading(time_s, math.cos(rad), math.sin(rad))
+    return math.cos(rad), math.sin(rad)
 
 
 def validate_compass(params: CompassParams) -> None:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -22,11 +21,17 @@ import numpy as np
 import numpy.typing as npt
 
 from navigation.compass import compass_heading_deg, magnetic_declination_deg
-from navigation.consistency import chi2_mean_bounds
+from navigation.consistency import chi2_mean_bounds, normalised_squares
 from navigation.filters import PoseFilter, augmented_x0
-from navigation.guidance import pure_pursuit_command, segment_progress, waypoint_command
+from navigation.guidance import pursuit_law, segment_axes, waypoint_law
 from navigation.metrics import TrackMetrics, line_waypoints, optional_tuple, score_track
-from navigation.sensors import GpsReceiver, gps_params, read_compass, validate_compass
+from navigation.sensors import (
+    GpsReceiver,
+    gps_params,
+    read_compass,
+    read_magnetometer,
+    validate_compass,
+)
 from navigation.types import (
     GUIDANCE_MODES,
     STRAIGHT,
@@ -38,8 +43,8 @@ from navigation.types import (
 )
 from navigation.vehicle import (
     TWO_PI,
-    disturb,
-    step,
+    disturb_heading,
+    step_pose,
     turn_geometry,
     validate_vehicle,
     vehicle_params_for,
@@ -307,9 +312,11 @@ def simulate(
             np.diag([gps_sigma**2, gps_sigma**2, compass_sigma**2]),
             params=config.kalman,
         )
-    nees: list[float] = []
-    nis: list[float] = []
-    nis_dof: list[int] = []
+    # NEES and NIS samples, solved in one batch after the run.
+    nees_err: list[tuple[float, float]] = []
+    nees_cov: list[FloatArray] = []
+    nis_y: list[FloatArray] = []
+    nis_s: list[FloatArray] = []
     ex, ey, eh = fix.x_m, fix.y_m, heading_meas
     gps_period = 1.0 / gps_model.rate_hz
     compass_period = 1.0 / comp.rate_hz
@@ -323,7 +330,8 @@ def simulate(
     n_compass = 0
 
     delay_steps = int(round(veh.clutch_delay_s / dt_s))
-    servo: deque[int] = deque([STRAIGHT] * delay_steps)
+    # The commands in the servo, oldest first (a tuple: it keys the memo of their yaw below).
+    servo: tuple[int, ...] = (STRAIGHT,) * delay_steps
     reached = np.full(n_wp, np.nan)
     reached[0] = 0.0
     target = 1
@@ -346,8 +354,24 @@ def simulate(
     # will have turned the tractor to when its new command acts (a Smith predictor), or a
     # tractor that turns at π/4 rad/s behind a 0.3 s servo would overshoot every correction.
     yaw_step = {c: u_by_clutch[c][1] * dt_s for c in (-1, 0, 1)}
+    # Their summed yaw per servo content: few distinct contents, summed once each.
+    servo_yaw: dict[tuple[int, ...], float] = {}
     est_wp_err = np.full(n_wp, np.nan)
     lonlat_near = _linearised_lonlat(frame, wp_x, wp_y) if not line_mode else None
+    # Plain floats in the loop (numpy scalars are several times slower); each leg's segment
+    # (previous waypoint to target) and its axes, computed once.
+    wp_xs: list[float] = wp_x.tolist()
+    wp_ys: list[float] = wp_y.tolist()
+    wp_lons: list[float] = wp_lon.tolist()
+    wp_lats: list[float] = wp_lat.tolist()
+    legs = [(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)] + [
+        (wp_xs[i - 1], wp_ys[i - 1], wp_xs[i], wp_ys[i])
+        + segment_axes(wp_xs[i - 1], wp_ys[i - 1], wp_xs[i], wp_ys[i])
+        for i in range(1, n_wp)
+    ]
+    accept_m = line_radius if line_mode else radius
+    # The true state as floats: x, y, heading, engaged clutch.
+    tx_m, ty_m, th_rad, t_clutch = state.x_m, state.y_m, state.heading_rad, state.clutch
 
     log_t: list[float] = []
     log_tx: list[float] = []
@@ -364,46 +388,48 @@ def simulate(
         t = k * dt_s
         # Sense: compass readings accumulate; each GPS fix triggers a filter update.
         if t >= next_compass - _EPS_S:
-            reading = read_compass(state, rng, t, declination_deg=declination, params=comp)
-            h = math.radians(compass_heading_deg(reading.mag_x, reading.mag_y, declination))
+            mag_x, mag_y = read_magnetometer(th_rad, rng, declination_deg=declination, params=comp)
+            h = math.radians(compass_heading_deg(mag_x, mag_y, declination))
             sum_sin += math.sin(h)
             sum_cos += math.cos(h)
             n_compass += 1
             next_compass += compass_period
         if t >= next_gps - _EPS_S:
-            fix = gps.read(state, t)
+            fix_x, fix_y = gps.read_xy(tx_m, ty_m)
             gps_t.append(t)
-            gps_x.append(fix.x_m)
-            gps_y.append(fix.y_m)
+            gps_x.append(fix_x)
+            gps_y.append(fix_y)
             next_gps += gps_period
             if n_compass:
                 kf.update(
-                    gps_xy_m=(fix.x_m, fix.y_m),
+                    gps_xy_m=(fix_x, fix_y),
                     gps_sigma_m=gps_sigma,
                     heading_rad=math.atan2(sum_sin, sum_cos),
                     heading_sigma_rad=compass_sigma / math.sqrt(n_compass),
                 )
             else:
-                kf.update(gps_xy_m=(fix.x_m, fix.y_m), gps_sigma_m=gps_sigma)
+                kf.update(gps_xy_m=(fix_x, fix_y), gps_sigma_m=gps_sigma)
             sum_sin = sum_cos = 0.0
             n_compass = 0
-            ex, ey, eh = (float(v) for v in kf.ekf.x[:3])
+            ex, ey, eh = kf.pose
             # Consistency: the position error against the filter's own covariance.
-            err = np.array([ex - state.x_m, ey - state.y_m])
-            nees.append(float(err @ np.linalg.solve(kf.P[:2, :2], err)))
-            if kf.nis is not None:
-                nis.append(kf.nis)
-                nis_dof.append(kf.nis_dof)
+            nees_err.append((ex - tx_m, ey - ty_m))
+            nees_cov.append(kf.P[:2, :2])
+            if kf.innovation is not None:
+                nis_y.append(kf.innovation[0])
+                nis_s.append(kf.innovation[1])
 
         # Guide: advance past reached waypoints, then steer to the current one.
         clutch = STRAIGHT
-        eh_pred = (eh + sum(yaw_step[c] for c in servo)) % TWO_PI
+        yaw_ahead = servo_yaw.get(servo)
+        if yaw_ahead is None:
+            yaw_ahead = servo_yaw[servo] = sum(yaw_step[c] for c in servo)
+        eh_pred = (eh + yaw_ahead) % TWO_PI
         while True:
-            ax, ay = wp_x[target - 1], wp_y[target - 1]
-            bx, by = wp_x[target], wp_y[target]
-            along, _, length = segment_progress(ex, ey, ax, ay, bx, by)
-            if lonlat_near is None:
-                cmd = pure_pursuit_command(
+            ax, ay, bx, by, ux, uy, length = legs[target]
+            along = (ex - ax) * ux + (ey - ay) * uy  # segment_progress's along-track [m]
+            if lonlat_near is None:  # line mode
+                cmd_clutch, _, distance = pursuit_law(
                     ex,
                     ey,
                     eh_pred,
@@ -411,22 +437,24 @@ def simulate(
                     ay,
                     bx,
                     by,
+                    along,
+                    length,
                     lookahead_m=guid.lookahead_m,
                     tolerance_deg=tol_line,
                 )
             else:
                 lon, lat = lonlat_near(target, ex, ey)
-                cmd = waypoint_command(
+                cmd_clutch, _, distance = waypoint_law(
                     lon,
                     lat,
                     math.degrees(eh_pred),
-                    wp_lon[target],
-                    wp_lat[target],
+                    wp_lons[target],
+                    wp_lats[target],
                     tolerance_deg=tol_wp,
                 )
-            if along >= length or cmd.distance_m <= (line_radius if line_mode else radius):
+            if along >= length or distance <= accept_m:
                 reached[target] = t
-                est_wp_err[target] = math.hypot(ex - wp_x[target], ey - wp_y[target])
+                est_wp_err[target] = math.hypot(ex - bx, ey - by)
                 target += 1
                 if on_waypoint is not None:
                     on_waypoint(target, n_wp)
@@ -434,27 +462,30 @@ def simulate(
                     completed = True
                     break
                 continue
-            clutch = cmd.clutch
+            clutch = cmd_clutch
             break
 
         log_t.append(t)
-        log_tx.append(state.x_m)
-        log_ty.append(state.y_m)
-        log_th.append(state.heading_rad)
+        log_tx.append(tx_m)
+        log_ty.append(ty_m)
+        log_th.append(th_rad)
         log_ex.append(ex)
         log_ey.append(ey)
         log_eh.append(eh)
-        log_cl.append(state.clutch)
+        log_cl.append(t_clutch)
         log_tg.append(min(target, n_wp - 1))
         if completed or k == n_steps:
             break
 
         # Act: the servo engages the clutch commanded ``delay_steps`` steps ago.
-        servo.append(clutch)
-        engaged = servo.popleft()
+        servo += (clutch,)
+        engaged = servo[0]
+        servo = servo[1:]
         slip = 1.0 + speed_noise * rng.standard_normal() if speed_noise else 1.0
-        state = step(
-            state,
+        tx_m, ty_m, th_rad = step_pose(
+            tx_m,
+            ty_m,
+            th_rad,
             engaged,
             dt_s,
             speed_mps=speed * slip,
@@ -462,7 +493,8 @@ def simulate(
             yaw_rate_rad_s=omega_turn * slip,
             pivot_m=pivot,
         )
-        state = disturb(state, rng, dt_s, yaw_noise_deg_per_sqrt_s=yaw_noise)
+        t_clutch = engaged
+        th_rad = disturb_heading(th_rad, rng, dt_s, yaw_noise_deg_per_sqrt_s=yaw_noise)
         ex, ey, eh = kf.propagate(*u_by_clutch[engaged], dt_s)
 
     time_arr = np.array(log_t)
@@ -491,13 +523,16 @@ def simulate(
         est_max, est_mean = float(finite.max()), float(finite.mean())
         on_lines = est_wp_err[line_waypoints(plan) & np.isfinite(est_wp_err)]
         line_est_max = float(on_lines.max()) if len(on_lines) else None
-    nees_mean = float(np.mean(nees)) if nees else None
-    nis_mean = float(np.mean(nis)) if nis else None
+    nees = normalised_squares(nees_err, nees_cov)
+    nis = normalised_squares(nis_y, nis_s)
+    nis_dof = [len(y) for y in nis_y]
+    nees_mean = float(np.mean(nees)) if len(nees) else None
+    nis_mean = float(np.mean(nis)) if len(nis) else None
     # NEES samples of one run are correlated in time (the wander lasts a minute), so one run
     # counts as one sample of its time average: the bounds are those of one 2-dof χ² draw.
     # Innovations of a consistent filter are white, so every update counts for the NIS.
     nees_bounds = chi2_mean_bounds(2, 1)
-    nis_bounds = chi2_mean_bounds(round(np.mean(nis_dof)), len(nis)) if nis else None
+    nis_bounds = chi2_mean_bounds(round(np.mean(nis_dof)), len(nis)) if len(nis) else None
     metrics = dataclasses.replace(
         metrics,
         filter_rms_m=float(np.sqrt(np.mean((ex_a - tx) ** 2 + (ey_a - ty) ** 2))),

@@ -128,30 +128,61 @@ def step(
     >>> (round(s.x_m, 9), round(s.y_m, 9))     # 5 m due north
     (0.0, 5.0)
     """
-    sin_h = math.sin(state.heading_rad)
-    cos_h = math.cos(state.heading_rad)
+    return VehicleState(
+        *step_pose(
+            state.x_m,
+            state.y_m,
+            state.heading_rad,
+            clutch,
+            dt_s,
+            speed_mps=speed_mps,
+            track_width_m=track_width_m,
+            yaw_rate_rad_s=yaw_rate_rad_s,
+            pivot_m=pivot_m,
+        ),
+        clutch,
+    )
+
+
+def step_pose(
+    x_m: float,
+    y_m: float,
+    heading_rad: float,
+    clutch: int,
+    dt_s: float,
+    *,
+    speed_mps: float,
+    track_width_m: float,
+    yaw_rate_rad_s: float | None = None,
+    pivot_m: float | None = None,
+) -> tuple[float, float, float]:
+    """:func:`step` on a bare pose: the new ``(x_m, y_m, heading_rad)``, for the 10 Hz loop.
+
+    Examples
+    --------
+    >>> x, y, h = step_pose(0.0, 0.0, 0.0, STRAIGHT, 10.0, speed_mps=0.5, track_width_m=1.8)
+    >>> (round(x, 9), round(y, 9), h)     # 5 m due north
+    (0.0, 5.0, 0.0)
+    """
+    sin_h = math.sin(heading_rad)
+    cos_h = math.cos(heading_rad)
     if clutch == STRAIGHT:
         d = speed_mps * dt_s
-        return VehicleState(state.x_m + d * sin_h, state.y_m + d * cos_h, state.heading_rad, 0)
+        return x_m + d * sin_h, y_m + d * cos_h, heading_rad
     # The point turned about: the braked wheel, half a track to the left (clutch -1) or right
     # (+1) of the axle centre, or the centre of the turning circle.
     # "Right" of a heading h (clockwise from north) is (cos h, -sin h) in (east, north).
     half = (0.5 * track_width_m if pivot_m is None else pivot_m) * clutch
-    px = state.x_m + half * cos_h
-    py = state.y_m - half * sin_h
+    px = x_m + half * cos_h
+    py = y_m - half * sin_h
     rate = speed_mps / track_width_m if yaw_rate_rad_s is None else yaw_rate_rad_s
     dtheta = clutch * rate * dt_s
     c = math.cos(dtheta)
     s = math.sin(dtheta)
-    rx = state.x_m - px
-    ry = state.y_m - py
+    rx = x_m - px
+    ry = y_m - py
     # Clockwise rotation by dtheta in (east, north): (x, y) -> (x c + y s, -x s + y c).
-    return VehicleState(
-        px + rx * c + ry * s,
-        py - rx * s + ry * c,
-        (state.heading_rad + dtheta) % TWO_PI,
-        clutch,
-    )
+    return px + rx * c + ry * s, py - rx * s + ry * c, (heading_rad + dtheta) % TWO_PI
 
 
 def disturb(
@@ -160,8 +191,20 @@ def disturb(
     """Add the heading random walk of uneven ground over one step."""
     if yaw_noise_deg_per_sqrt_s <= 0.0:
         return state
+    heading = disturb_heading(
+        state.heading_rad, rng, dt_s, yaw_noise_deg_per_sqrt_s=yaw_noise_deg_per_sqrt_s
+    )
+    return VehicleState(state.x_m, state.y_m, heading, state.clutch)
+
+
+def disturb_heading(
+    heading_rad: float, rng: np.random.Generator, dt_s: float, *, yaw_noise_deg_per_sqrt_s: float
+) -> float:
+    """:func:`disturb` on a bare heading [rad], for the 10 Hz loop (no draw without noise)."""
+    if yaw_noise_deg_per_sqrt_s <= 0.0:
+        return heading_rad
     dtheta = math.radians(yaw_noise_deg_per_sqrt_s) * math.sqrt(dt_s) * rng.standard_normal()
-    return VehicleState(state.x_m, state.y_m, (state.heading_rad + dtheta) % TWO_PI, state.clutch)
+    return (heading_rad + dtheta) % TWO_PI
 
 
 def validate_vehicle(params: VehicleParams) -> None:
@@ -201,7 +244,9 @@ __all__ = [
     "RIGHT",
     "STRAIGHT",
     "disturb",
+    "disturb_heading",
     "step",
+    "step_pose",
     "turn_geometry",
     "validate_vehicle",
     "vehicle_params_for",

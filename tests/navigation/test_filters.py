@@ -120,3 +120,31 @@ def test_the_white_noise_filter_is_overconfident_with_the_m8n(paper_plan) -> Non
     runs = [simulate(paper_plan, config, np.random.default_rng(s)).metrics for s in range(5)]
     nees = batch_consistency([m.nees_mean for m in runs], dof=2)
     assert nees["mean"] > 5 * nees["high"]
+
+
+def test_batched_normalised_squares_equal_the_per_sample_solve_bit_for_bit() -> None:
+    # The simulator solves a run's NEES and NIS in one batch: the same floats as one
+    # ``e @ solve(C, e)`` per sample, whatever the mix of dimensions.
+    from navigation.consistency import normalised_squares
+
+    rng = np.random.default_rng(3)
+    errors, covariances = [], []
+    for i in range(300):
+        dim = (2, 3, 2, 1)[i % 4]
+        A = rng.standard_normal((dim, dim))
+        errors.append(rng.standard_normal(dim) * 10.0 ** rng.uniform(-3, 1))
+        covariances.append((A @ A.T + 0.1 * np.eye(dim)) * 10.0 ** rng.uniform(-4, 2))
+    expected = [float(e @ np.linalg.solve(C, e)) for e, C in zip(errors, covariances, strict=True)]
+    assert normalised_squares(errors, covariances).tolist() == expected
+    assert normalised_squares([], []).tolist() == []
+
+
+def test_the_filter_keeps_its_innovation_and_states_its_nis() -> None:
+    f = PoseFilter(np.array([0.0, 0.0, 0.0]), np.eye(3), params=FilterParams())
+    assert f.nis is None and f.innovation is None
+    f.propagate(0.56, 0.0, 0.1)
+    f.update(gps_xy_m=(0.5, 0.2), gps_sigma_m=1.0, heading_rad=0.05, heading_sigma_rad=0.1)
+    assert f.innovation is not None
+    y, S = f.innovation
+    assert f.nis_dof == 3 and f.nis == float(y @ np.linalg.solve(S, y))
+    assert f.pose == tuple(f.x[:3].tolist())

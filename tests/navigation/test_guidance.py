@@ -14,8 +14,11 @@ from navigation.guidance import (
     haversine_m,
     heading_error_deg,
     pure_pursuit_command,
+    pursuit_law,
+    segment_axes,
     segment_progress,
     waypoint_command,
+    waypoint_law,
 )
 from navigation.types import LEFT, RIGHT, STRAIGHT
 
@@ -119,3 +122,31 @@ def test_pure_pursuit_pulls_back_onto_the_line_from_either_side() -> None:
 def test_segment_progress_signs() -> None:
     along, cross, length = segment_progress(3.0, 1.0, 0.0, 0.0, 10.0, 0.0)  # segment due east
     assert (along, cross, length) == pytest.approx((3.0, -1.0, 10.0))  # north of it = left
+
+
+def test_the_loops_waypoint_law_is_haversine_and_bearing_bit_for_bit() -> None:
+    rng = np.random.default_rng(5)
+    lon1, lat1, lon2, lat2 = random_pairs(rng, 500, 0.01)
+    heading = rng.uniform(0.0, 360.0, 500)
+    for p in zip(lon1, lat1, lon2, lat2, heading, strict=True):
+        a, b, c, d, h = (float(v) for v in p)
+        error = heading_error_deg(bearing_deg(a, b, c, d), h)
+        expected = (clutch_for(error, tolerance_deg=8.0), error, haversine_m(a, b, c, d))
+        assert waypoint_law(a, b, h, c, d, tolerance_deg=8.0) == expected
+
+
+def test_the_loops_pursuit_law_is_pure_pursuit_given_the_progress() -> None:
+    rng = np.random.default_rng(6)
+    for _ in range(300):
+        x, y, ax, ay, bx, by = (float(v) for v in rng.uniform(-50.0, 50.0, 6))
+        h = float(rng.uniform(0.0, 2.0 * math.pi))
+        along, _, length = segment_progress(x, y, ax, ay, bx, by)
+        ux, uy, axes_length = segment_axes(ax, ay, bx, by)
+        # The loop's along-track distance from the leg's axes: segment_progress's, exactly.
+        assert (axes_length, (x - ax) * ux + (y - ay) * uy) == (length, along)
+        cmd = pure_pursuit_command(x, y, h, ax, ay, bx, by, lookahead_m=2.5, tolerance_deg=3.0)
+        law = pursuit_law(
+            x, y, h, ax, ay, bx, by, along, length, lookahead_m=2.5, tolerance_deg=3.0
+        )
+        assert law == (cmd.clutch, cmd.heading_error_deg, cmd.distance_m)
+    assert segment_axes(1.0, 2.0, 1.0, 2.0) == (0.0, 0.0, 0.0)

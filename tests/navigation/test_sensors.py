@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from navigation.sensors import GpsReceiver, gps_params
-from navigation.types import GPS_PRESETS, GpsParams, NavigationError, VehicleState
+from navigation.sensors import GpsReceiver, gps_params, read_compass, read_magnetometer
+from navigation.types import GPS_PRESETS, CompassParams, GpsParams, NavigationError, VehicleState
 
 STILL = VehicleState(0.0, 0.0, 0.0)
 
@@ -78,3 +78,16 @@ def test_unknown_preset_is_refused_with_the_choices() -> None:
 def test_bad_custom_gps_is_refused(params: GpsParams, field: str) -> None:
     with pytest.raises(NavigationError, match=rf"^{field}: "):
         gps_params(params)
+
+
+def test_the_loops_bare_reads_equal_the_state_ones() -> None:
+    a = GpsReceiver(GPS_PRESETS["m8n"], np.random.default_rng(4))
+    b = GpsReceiver(GPS_PRESETS["m8n"], np.random.default_rng(4))
+    compass = CompassParams()
+    for i in range(20):
+        state = VehicleState(3.0 * i, -2.0 * i, 0.3 * i)
+        fix = a.read(state, 0.1 * i)
+        assert b.read_xy(state.x_m, state.y_m) == (fix.x_m, fix.y_m)
+        reading = read_compass(state, a.rng, 0.1 * i, declination_deg=0.8, params=compass)
+        mag = read_magnetometer(state.heading_rad, b.rng, declination_deg=0.8, params=compass)
+        assert mag == (reading.mag_x, reading.mag_y)

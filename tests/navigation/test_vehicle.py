@@ -8,7 +8,15 @@ import numpy as np
 import pytest
 
 from navigation.types import LEFT, RIGHT, STRAIGHT, NavigationError, VehicleParams, VehicleState
-from navigation.vehicle import step, validate_vehicle, wrap_angle, yaw_rate
+from navigation.vehicle import (
+    disturb,
+    disturb_heading,
+    step,
+    step_pose,
+    validate_vehicle,
+    wrap_angle,
+    yaw_rate,
+)
 
 V = 0.56
 B = 1.8
@@ -111,3 +119,21 @@ def test_step_is_exact_whatever_the_step_size() -> None:
     coarse = run(VehicleState(0.0, 0.0, 1.0), LEFT, 3.0, 1.0)
     fine = run(VehicleState(0.0, 0.0, 1.0), LEFT, 3.0, 0.001)
     assert np.allclose([coarse.x_m, coarse.y_m], [fine.x_m, fine.y_m], atol=1e-9)
+
+
+@pytest.mark.parametrize("clutch", [LEFT, STRAIGHT, RIGHT])
+def test_the_loops_bare_pose_step_and_disturbance_equal_the_state_ones(clutch: int) -> None:
+    rng = np.random.default_rng(8)
+    for _ in range(50):
+        x, y = (float(v) for v in rng.uniform(-100.0, 100.0, 2))
+        h = float(rng.uniform(0.0, 2.0 * math.pi))
+        kwargs = {"speed_mps": V, "track_width_m": B, "yaw_rate_rad_s": 0.78, "pivot_m": 0.35}
+        s = step(VehicleState(x, y, h), clutch, 0.1, **kwargs)
+        assert step_pose(x, y, h, clutch, 0.1, **kwargs) == (s.x_m, s.y_m, s.heading_rad)
+        assert s.clutch == clutch
+    a, b = np.random.default_rng(9), np.random.default_rng(9)
+    for _ in range(20):
+        state = disturb(VehicleState(1.0, 2.0, 6.2), a, 0.1, yaw_noise_deg_per_sqrt_s=0.5)
+        assert disturb_heading(6.2, b, 0.1, yaw_noise_deg_per_sqrt_s=0.5) == state.heading_rad
+    assert disturb_heading(6.2, b, 0.1, yaw_noise_deg_per_sqrt_s=0.0) == 6.2
+    assert a.standard_normal() == b.standard_normal()  # no draw without noise
