@@ -18,7 +18,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -125,10 +125,10 @@ def fit_lines(
     # A turn depends only on the two line ends it joins, as given (the pull-back is its own
     # output), so a refit round reuses every turn whose pair of lines is still adjacent and
     # plans only the turns of the pairs that dropping a line made.
-    turns = _TurnStore(u, v_start, v_end, up, machine, vehicle, planned)
+    turns = _TurnStore(_Lines(u, v_start, v_end, up, index), machine, vehicle, planned)
     for round_ in range(_MAX_ROUNDS):
         k = np.nonzero(keep)[0]
-        fit, drop = _fit_once(k, u, v_start, v_end, up, index, turns, machine)
+        fit, drop = _fit_once(k, turns)
         if not drop.any():
             return fit
         if round_ < _MAX_ROUNDS // 2:
@@ -144,7 +144,7 @@ def fit_lines(
             drop = side_drop
         keep[k[drop]] = False
     k = np.nonzero(keep)[0]
-    fit, _ = _fit_once(k[:1], u, v_start, v_end, up, index, turns, machine)
+    fit, _ = _fit_once(k[:1], turns)
     return fit
 
 
@@ -186,18 +186,20 @@ def _median(values: FloatArray) -> float:
     return float((ordered[half - 1] + ordered[half]) / 2.0)
 
 
-def _fit_once(
-    k: IntArray,
-    u_all: FloatArray,
-    a_all: FloatArray,
-    b_all: FloatArray,
-    up_all: BoolArray,
-    index_all: IntArray,
-    turns: _TurnStore,
-    machine: Chains,
-) -> tuple[FittedLines, BoolArray]:
+class _Lines(NamedTuple):
+    """The lines :func:`fit_lines` fits, in driving order (sweep frame [m])."""
+
+    u: FloatArray
+    a: FloatArray  # where each starts (v)
+    b: FloatArray  # where each ends (v)
+    up: BoolArray  # whether it runs towards +v
+    line_index: IntArray  # its left-to-right index, carried through
+
+
+def _fit_once(k: IntArray, turns: _TurnStore) -> tuple[FittedLines, BoolArray]:
     """One fitting round on the lines ``k``: the fitted lines, and which to drop before the next."""
-    u, a, b, up, index = u_all[k], a_all[k], b_all[k], up_all[k], index_all[k]
+    lines, machine = turns.lines, turns.machine
+    u, a, b, up, index = lines.u[k], lines.a[k], lines.b[k], lines.up[k], lines.line_index[k]
     n = len(u)
     if n < 2:
         return FittedLines(u, a, b, index, turns.empty), np.zeros(n, dtype=bool)
@@ -227,19 +229,12 @@ class _TurnStore:
     """Every turn fitted so far, by the pair of lines it joins (:func:`fit_lines`' rounds)."""
 
     def __init__(
-        self,
-        u: FloatArray,
-        a: FloatArray,
-        b: FloatArray,
-        up: BoolArray,
-        machine: Chains,
-        vehicle: Vehicle,
-        planned: TurnCurves | None = None,
+        self, lines: _Lines, machine: Chains, vehicle: Vehicle, planned: TurnCurves | None = None
     ) -> None:
-        self._u, self._a, self._b, self._up = u, a, b, up
+        self.lines, self.machine = lines, machine
         self._planned = planned  # the turns of the first round, if given
-        self._machine, self._vehicle = machine, vehicle
-        self._n = len(u)
+        self._vehicle = vehicle
+        self._n = len(lines.u)
         self._slot: dict[int, int] = {}
         self.empty = no_turns(vehicle)
         self.curves = self.empty
@@ -257,9 +252,8 @@ class _TurnStore:
             if self._planned is not None and not slot and len(new) == self._n - 1:
                 planned = self._planned  # the first round: every line and its next
             curves, shift, fits = _fit_turns(
-                first[pick], second[pick], self._u, self._a, self._b, self._up,
-                self._machine, self._vehicle, planned,
-            )  # fmt: skip
+                first[pick], second[pick], self.lines, self.machine, self._vehicle, planned
+            )
             base = len(self.shift)
             for j, i in enumerate(new):
                 slot[keys[i]] = base + j
@@ -279,10 +273,7 @@ class _TurnStore:
 def _fit_turns(
     first: IntArray,
     second: IntArray,
-    u: FloatArray,
-    a: FloatArray,
-    b: FloatArray,
-    up: BoolArray,
+    lines: _Lines,
     machine: Chains,
     vehicle: Vehicle,
     planned: TurnCurves | None = None,
@@ -300,9 +291,12 @@ def _fit_turns(
     fits : ndarray of bool
         Whether it fits the machine area at all.
     """
+    u, up = lines.u, lines.up
     if planned is None:
         yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
-        ends = TurnEnds(u[first], b[first], yaw[first], u[second], a[second], yaw[second])
+        ends = TurnEnds(
+            u[first], lines.b[first], yaw[first], u[second], lines.a[second], yaw[second]
+        )
         curves = vehicle_turns(ends, vehicle)
     else:
         curves = planned
