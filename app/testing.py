@@ -64,14 +64,17 @@ class Account:
 
 
 class ServerUrl(str):
-    """A test server's base URL (a ``str``) that also knows its first account."""
+    """A test server's base URL (a ``str``) that also knows its first account and process."""
 
     account: Account
+    #: The ``tillpath serve`` process (None if not known): its tree holds the job workers.
+    pid: int | None
 
-    def __new__(cls, url: str, account: Account) -> ServerUrl:
-        """Make the URL string and attach ``account``."""
+    def __new__(cls, url: str, account: Account, pid: int | None = None) -> ServerUrl:
+        """Make the URL string and attach ``account`` and ``pid``."""
         made = super().__new__(cls, url)
         made.account = account
+        made.pid = pid
         return made
 
     @property
@@ -177,7 +180,8 @@ class ServerProcess:
     def base_url(self) -> ServerUrl:
         """``http://127.0.0.1:<port>``, with the first account (``.headers``) once started."""
         assert self.account is not None, "not started"
-        return ServerUrl(f"http://127.0.0.1:{self.port}", self.account)
+        pid = None if self.process is None else self.process.pid
+        return ServerUrl(f"http://127.0.0.1:{self.port}", self.account, pid)
 
     @property
     def pid(self) -> int:

@@ -84,24 +84,19 @@ def post_once(url: ServerUrl, body: bytes) -> dict[str, object]:
         return plan
 
 
-def settle(url: str, *, timeout_s: float = 60.0, idle_cpu_s: float = 0.3) -> float:
+def settle(url: ServerUrl, *, timeout_s: float = 60.0, idle_cpu_s: float = 0.3) -> float:
     """Wait until the server and its job workers are idle; return the seconds waited.
 
     ``tillpath serve`` answers ``/api/health`` before the embedded Dask cluster's worker
     processes have started (some 10 s of a core on a loaded 2-core machine): measured then,
     the first load shares the cores with that start-up, not with what the budget is about.
     Idle: the server's process tree used under ``idle_cpu_s`` of CPU in the last second (an
-    idle cluster's heartbeats take some 0.12 s a second of it).
+    idle cluster's heartbeats take some 0.1 s a second of it).
     """
-    port = str(urllib.parse.urlsplit(url).port)
     started = time.monotonic()
-    server = None
-    for process in psutil.process_iter(["cmdline"]):
-        cmdline = process.info["cmdline"] or []
-        if "serve" in cmdline and "--port" in cmdline and port in cmdline:
-            server = process
-    if server is None:
+    if url.pid is None:
         return 0.0
+    server = psutil.Process(url.pid)
 
     def tree_cpu_s() -> float:
         total = 0.0
