@@ -13,6 +13,10 @@ piece per piece of the field (a narrowing neck would otherwise scatter the round
 small loops); the core left inside the last round is then covered back and forth by the
 boustrophedon planner (:func:`planner.general.plan_general`) for the same vehicle.
 
+A vehicle that pivots (no turning radius) drives each sharp corner of a round as a loop
+about its outer wheel (:func:`planner.round_corners.corner_loops`), which tills the corner
+that a pivot about the inner wheel would leave; the loop is taken where the body stays inside.
+
 Rounds are joined, and the last round to the core, by forward Dubins curves at the same radius
 (:func:`planner.turns.dubins_turn`): after a full round the vehicle drives on along it until a
 lane change to the next round (or the move to the core's first line) fits inside the field for
@@ -38,6 +42,7 @@ from planner import general
 from planner.errors import InvalidParameterError
 from planner.general import RouteBuilder
 from planner.line_ends import machine_area
+from planner.round_corners import corner_loops
 from planner.route_builder import densify
 from planner.routing import FieldRouter
 from planner.turns import SAGITTA_M, STEP_M, TurnEnds, dubins_turn, turning_radius_m
@@ -129,12 +134,13 @@ def order_spiral(
     Examples
     --------
     A 40 m × 24 m field at 4 m: three rounds, then the 16 m × 0 m core is nothing; the hand
-    tractor's pivots (0.35 m about the braked wheel) round the corners off a little. A small
-    tractor (3 m radius) drives two rounds and two core lines.
+    tractor pivots about its outer wheel at each corner (a loop, :mod:`planner.round_corners`)
+    and so tills the corners too. A small tractor (3 m radius) drives two rounds and two core
+    lines, and leaves the corners its arcs cut off.
 
     >>> plan = order_spiral(shapely.box(0, 0, 40, 24), interval_m=4.0)
     >>> plan.round_count, plan.line_count, round(plan.coverage_ratio, 3)
-    (3, 0, 0.985)
+    (3, 0, 1.0)
     >>> plan = order_spiral(shapely.box(0, 0, 40, 24), interval_m=4.0, vehicle="small_tractor")
     >>> plan.round_count, plan.line_count, round(plan.coverage_ratio, 3)
     (2, 2, 0.892)
@@ -168,7 +174,8 @@ def order_spiral(
     route = RouteBuilder()
     if start_xy is not None:
         route.append("transit", None, np.array([start_xy]), "start")
-    joiner = _Joiner(route, router, allowed, radius)
+    # A vehicle that pivots tills each sharp corner of a round with a loop the other way.
+    joiner = _Joiner(route, router, allowed, radius, loops=machine.min_turn_radius_m == 0.0)
     round_index = 0
     for rings in levels:
         for ring in _nearest_first(rings, joiner.position()):
@@ -217,11 +224,13 @@ def order_spiral(
     covered = core_covered
     if levels:
         band = field_local.difference(shapely.union_all(kept)) if kept else field_local
+        # Each round as driven, from where it is joined to where it is left (flat caps).
         footprints = shapely.union_all(
             [
-                ring.buffer(implement / 2.0, cap_style="flat", join_style="mitre")
-                for rings in levels
-                for ring in rings
+                shapely.LineString(points).buffer(
+                    implement / 2.0, cap_style="flat", join_style="mitre"
+                )
+                for points in joiner.driven
             ]
         )
         covered += float(shapely.intersection(band, footprints).area)
@@ -434,13 +443,22 @@ class _Joiner:
     """Builds the route: rounds driven once round, and drivable joins between them."""
 
     def __init__(
-        self, route: RouteBuilder, router: FieldRouter, allowed: shapely.Geometry, radius: float
+        self,
+        route: RouteBuilder,
+        router: FieldRouter,
+        allowed: shapely.Geometry,
+        radius: float,
+        *,
+        loops: bool = False,
     ) -> None:
         self.route = route
         self.router = router
         self.allowed = allowed
         self.radius = radius
         self.step = round_step_m(radius)
+        self.loops = loops  # corner loops (planner.round_corners) in every round
+        #: Every round's points as driven (once round and on to where it is left), in order.
+        self.driven: list[FloatArray] = []
         #: The round being driven, its points from the entry on, and its round index.
         self.ring: FloatArray | None = None
         self.ring_index: int | None = None
@@ -454,6 +472,8 @@ class _Joiner:
     def add_round(self, ring: LinearRing, index: int) -> None:
         """Drive ``ring`` once round (the exterior anticlockwise, holes clockwise)."""
         points = resample_ring(ring, self.step)
+        if self.loops:
+            points = corner_loops(points, self.radius, self.allowed, self.step)
         if self.ring is None:
             here = self.route.here()
             entry = 0 if here is None else _nearest(points, np.asarray(here))
@@ -527,6 +547,7 @@ class _Joiner:
         n = len(self.ring)
         along = self.ring[np.arange(n + extra + 1) % n]
         self.route.append("round", self.ring_index, along, "headland")
+        self.driven.append(along)
         if curve is not None and len(curve) > 1:
             self.route.append("turn", None, curve, "turn", last_role=last_role)  # type: ignore[arg-type]
 

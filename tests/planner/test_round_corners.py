@@ -1,0 +1,83 @@
+"""Corner loops (planner.round_corners): a pivoting vehicle's round tills its corners, keeps
+to where the body may go, bends no tighter than the pivot and loses nothing it covered."""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from shapely import LineString, Polygon
+
+from planner.round_corners import corner_loops
+from planner.spiral import RADIUS_SLACK, regular_region, resample_ring, round_step_m
+from tests.planner.plan_checks import turn_curvatures
+
+SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: The hand tractor's pivot (half its 0.7 m track), as the spiral plans it.
+PIVOT_M = 0.35 * RADIUS_SLACK
+
+
+def band_footprint(points: np.ndarray, width_m: float) -> shapely.Geometry:
+    """What a round covers: the closed path buffered by half the width, mitre joins."""
+    closed = np.vstack([points, points[:2]])
+    return LineString(closed).buffer(width_m / 2.0, cap_style="flat", join_style="mitre")
+
+
+def round_of(field: Polygon, offset_m: float) -> np.ndarray:
+    """The spiral's round ``offset_m`` inside ``field``: corners arcs of the pivot."""
+    region = shapely.orient_polygons(regular_region(field.buffer(-offset_m), PIVOT_M))
+    assert isinstance(region, Polygon)
+    return resample_ring(region.exterior, round_step_m(PIVOT_M))
+
+
+@st.composite
+def convex_fields(draw: st.DrawFn) -> Polygon:
+    """Convex hulls of 3–9 random points in a 20–80 m square (thin ones left out)."""
+    seed = draw(st.integers(0, 2**32 - 1))
+    size = draw(st.floats(20.0, 80.0))
+    rng = np.random.default_rng(seed)
+    hull = shapely.MultiPoint(rng.uniform(0.0, size, (draw(st.integers(3, 9)), 2))).convex_hull
+    if not isinstance(hull, Polygon) or hull.buffer(-6.0).area < 0.1 * hull.area:
+        hull = shapely.box(0.0, 0.0, size, 0.7 * size)
+    return shapely.orient_polygons(hull)  # type: ignore[no-any-return]
+
+
+def test_a_square_round_tills_its_corners() -> None:
+    # A 4 m implement on a 20 m square, the round 2 m inside: the inner-wheel pivots leave
+    # about 1.2 m² at each corner; the loops leave nothing.
+    field = shapely.box(0.0, 0.0, 20.0, 20.0)
+    ring = round_of(field, 2.0)
+    allowed = field.buffer(-0.425)
+    looped = corner_loops(ring, PIVOT_M, allowed, round_step_m(PIVOT_M))
+    band = field.difference(field.buffer(-4.0, join_style="mitre"))
+    before = band.difference(band_footprint(ring, 4.0)).area
+    after = band.difference(band_footprint(looped, 4.0)).area
+    assert 4 * 1.0 < before < 4 * 1.4
+    assert after < 1e-3, after
+    assert shapely.covers(allowed, LineString(np.vstack([looped, looped[:1]])))
+
+
+def test_no_loop_where_the_body_would_leave() -> None:
+    # The round 0.5 m inside (a 1 m interval): a loop would swing 0.7 m towards the bund.
+    field = shapely.box(0.0, 0.0, 20.0, 20.0)
+    ring = round_of(field, 0.5)
+    looped = corner_loops(ring, PIVOT_M, field.buffer(-0.425), round_step_m(PIVOT_M))
+    assert looped is ring
+
+
+@SETTINGS
+@given(field=convex_fields(), offset=st.floats(1.0, 4.0))
+def test_loops_keep_inside_bend_no_tighter_and_lose_nothing(field: Polygon, offset: float) -> None:
+    ring = round_of(field, offset)
+    allowed = field.buffer(-0.425)
+    step = round_step_m(PIVOT_M)
+    looped = corner_loops(ring, PIVOT_M, allowed, step)
+    path = np.vstack([looped, looped[:1]])
+    assert shapely.covers(allowed.buffer(1e-9), LineString(path))
+    assert (np.hypot(*np.diff(path, axis=0).T) <= step + 1e-9).all()
+    assert (turn_curvatures(path) <= 1.0 / PIVOT_M * 1.02 + 0.02).all()
+    width = 2.0 * offset
+    before = shapely.intersection(field, band_footprint(ring, width)).area
+    after = shapely.intersection(field, band_footprint(looped, width)).area
+    assert after >= before - 1e-6 * field.area
