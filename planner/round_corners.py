@@ -63,7 +63,7 @@ def corner_loops(
     makes the round 2.57 m longer: a 270° arc instead of a 90° one, and each leg two radii
     longer (``r (3π/2 − π/2) + 4 r``).
 
-    >>> from planner.spiral import resample_ring
+    >>> from planner.round_shapes import resample_ring
     >>> square = shapely.box(0, 0, 12, 12).buffer(-0.36).buffer(0.36, quad_segs=32)
     >>> ring = resample_ring(shapely.orient_polygons(square).exterior, 0.15)
     >>> looped = corner_loops(ring, 0.36, shapely.box(-2, -2, 14, 14), 0.15)

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from shapely import LineString, Polygon
 
 from planner.round_corners import corner_loops
-from planner.spiral import RADIUS_SLACK, regular_region, resample_ring, round_step_m
+from planner.round_shapes import RADIUS_SLACK, regular_region, resample_ring, round_step_m
 from tests.planner.plan_checks import turn_curvatures
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
