@@ -29,6 +29,10 @@ FloatArray = npt.NDArray[np.float64]
 #: Corners turning less than this are left as arcs: the band's corner is small there, and a
 #: loop costs a nearly full pivot [rad].
 MIN_CORNER_RAD = math.radians(60.0)
+#: Corners turning more than this are left as arcs too: the loop's legs reach ``r·tan(θ/2)``
+#: past the corner, without bound as θ nears 180° (both ends of a finger 2 r wide count as
+#: one turn of about 180°), and its disc holds less of an acute corner [rad].
+MAX_CORNER_RAD = math.radians(135.0)
 #: A point of the round turns left by more than this when it lies on a corner's arc [rad].
 _TURNING_RAD = 0.02
 #: A corner's arc is at most this many times the length of an arc of the radius.
@@ -36,7 +40,7 @@ _ARC_SPREAD = 2.0
 
 
 def corner_loops(
-    points: FloatArray, radius_m: float, allowed: shapely.Geometry, step_m: float
+    points: FloatArray, *, radius_m: float, allowed: shapely.Geometry, step_m: float
 ) -> FloatArray:
     """Return a closed round's points with a loop at each sharp left corner that fits.
 
@@ -60,13 +64,13 @@ def corner_loops(
     Examples
     --------
     A 12 m square's round with quarter-circle corners of 0.36 m gains four loops; each
-    makes the round 2.57 m longer: a 270° arc instead of a 90° one, and each leg two radii
-    longer (``r (3π/2 − π/2) + 4 r``).
+    makes the round about 2.57 m longer: a 270° arc instead of a 90° one, and each leg two
+    radii longer (``r (3π/2 − π/2) + 4 r``; the arcs are polygons, a little shorter).
 
     >>> from planner.round_shapes import resample_ring
     >>> square = shapely.box(0, 0, 12, 12).buffer(-0.36).buffer(0.36, quad_segs=32)
     >>> ring = resample_ring(shapely.orient_polygons(square).exterior, 0.15)
-    >>> looped = corner_loops(ring, 0.36, shapely.box(-2, -2, 14, 14), 0.15)
+    >>> looped = corner_loops(ring, radius_m=0.36, allowed=shapely.box(-2, -2, 14, 14), step_m=0.15)
     >>> length = lambda p: float(np.hypot(*np.diff(np.vstack([p, p[:1]]), axis=0).T).sum())
     >>> round((length(looped) - length(ring)) / 4, 2), round(0.36 * (math.pi + 4), 2)
     (2.56, 2.57)
@@ -129,19 +133,22 @@ def _loop(
     t1 = points[order[(last + 2) % n]] - b
     t0, t1 = t0 / np.hypot(*t0), t1 / np.hypot(*t1)
     theta = math.atan2(t0[0] * t1[1] - t0[1] * t1[0], float(t0 @ t1))
-    if theta < MIN_CORNER_RAD:
+    if not MIN_CORNER_RAD <= theta <= MAX_CORNER_RAD:
         return None
-    arc = float(np.hypot(*np.diff(points[order[first : last + 2] % n], axis=0).T).sum())
+    arc = float(np.hypot(*np.diff(points[order[np.arange(first, last + 2) % n]], axis=0).T).sum())
     if arc > _ARC_SPREAD * r * theta + 2.0 * step:
         return None  # a long bend, not a corner of the radius
-    # The corner M where the legs' lines meet: a + s t0 = b − u t1.
+    # The corner M where the legs' lines meet: a + s t0 = b − u t1 (sin θ ≥ 0.7 here).
     cross = t0[0] * t1[1] - t0[1] * t1[0]
     s = ((b - a)[0] * t1[1] - (b - a)[1] * t1[0]) / cross
-    corner = a + s * t0
     reach = r * math.tan(theta / 2.0)
+    # M lies about an arc's reach ahead of ``a``: farther, and the arc was no corner of ours.
+    if not 0.0 < s <= 2.0 * reach + 2.0 * step:
+        return None
+    corner = a + s * t0
     start = corner + reach * t0
     end = corner - reach * t1
-    if float((start - a) @ t0) <= 0.0 or float((b - end) @ t1) <= 0.0:
+    if float((b - end) @ t1) <= 0.0:
         return None
     n0 = np.array([-t0[1], t0[0]])
     centre = start - r * n0

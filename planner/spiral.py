@@ -5,17 +5,19 @@ around every hole (``d`` the interval, ``w`` the vehicle's width), so its footpr
 band from ``o_i - d/2`` to ``o_i + d/2``, as the headland passes do (:mod:`planner.headlands`).
 
 Every round is a curve the vehicle drives (R1): the region it encloses is made regular for
-the turning radius ``R`` (:func:`regular_region`): nothing of it lies outside the field eroded
-by ``o_i``, so the body stays inside, and its boundary bends no tighter than ``R`` either way,
-so convex corners become arcs of radius ``R`` and the round swings wide of the field's inner
-(reflex) corners and of small holes. Rounds go inward while the area inside them stays in one
-piece per piece of the field (a narrowing neck would otherwise scatter the rounds into many
-small loops); the core left inside the last round is then covered back and forth by the
-boustrophedon planner (:func:`planner.general.plan_general`) for the same vehicle.
+the turning radius ``R`` (:func:`planner.round_shapes.regular_region`): nothing of it lies
+outside the field eroded by ``o_i``, so the body stays inside, and its boundary bends no
+tighter than ``R`` either way, so convex corners become arcs of radius ``R`` and the round
+swings wide of the field's inner (reflex) corners and of small holes. Rounds go inward while
+the area inside them stays in one piece per piece of the field (a narrowing neck would
+otherwise scatter the rounds into many small loops); the core left inside the last round is
+then covered back and forth by the boustrophedon planner
+(:func:`planner.general.plan_general`) for the same vehicle.
 
-A vehicle that pivots (no turning radius) drives each sharp corner of a round as a loop
-about its outer wheel (:func:`planner.round_corners.corner_loops`), which tills the corner
-that a pivot about the inner wheel would leave; the loop is taken where the body stays inside.
+A vehicle that pivots (no turning radius) drives each corner of a round that turns 60–135°
+as a loop about its outer wheel (:func:`planner.round_corners.corner_loops`), which tills the
+corner that a pivot about the inner wheel would leave; the loop is taken where the body stays
+inside.
 
 Rounds are joined, and the last round to the core, by forward Dubins curves at the same radius
 (:func:`planner.turns.dubins_turn`): after a full round the vehicle drives on along it until a
@@ -319,7 +321,9 @@ class _Joiner:
         """Drive ``ring`` once round (the exterior anticlockwise, holes clockwise)."""
         points = resample_ring(ring, self.step)
         if self.loops:
-            points = corner_loops(points, self.radius, self.allowed, self.step)
+            points = corner_loops(
+                points, radius_m=self.radius, allowed=self.allowed, step_m=self.step
+            )
         if self.ring is None:
             here = self.route.here()
             entry = 0 if here is None else _nearest(points, np.asarray(here))

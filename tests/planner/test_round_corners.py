@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from shapely import LineString, Polygon
 
@@ -24,10 +24,12 @@ def band_footprint(points: np.ndarray, width_m: float) -> shapely.Geometry:
     return LineString(closed).buffer(width_m / 2.0, cap_style="flat", join_style="mitre")
 
 
-def round_of(field: Polygon, offset_m: float) -> np.ndarray:
-    """The spiral's round ``offset_m`` inside ``field``: corners arcs of the pivot."""
+def round_of(field: Polygon, offset_m: float) -> np.ndarray | None:
+    """The spiral's round ``offset_m`` inside ``field``: corners arcs of the pivot (None if
+    no single round fits there)."""
     region = shapely.orient_polygons(regular_region(field.buffer(-offset_m), PIVOT_M))
-    assert isinstance(region, Polygon)
+    if not isinstance(region, Polygon) or region.is_empty:
+        return None
     return resample_ring(region.exterior, round_step_m(PIVOT_M))
 
 
@@ -39,7 +41,9 @@ def convex_fields(draw: st.DrawFn) -> Polygon:
     rng = np.random.default_rng(seed)
     hull = shapely.MultiPoint(rng.uniform(0.0, size, (draw(st.integers(3, 9)), 2))).convex_hull
     if not isinstance(hull, Polygon) or hull.buffer(-6.0).area < 0.1 * hull.area:
-        hull = shapely.box(0.0, 0.0, size, 0.7 * size)
+        # Thin ones as strips: a round's region a finger about 2 r wide turns some 180° at
+        # each end (the loops' legs would reach without bound).
+        hull = shapely.box(0.0, 0.0, size, draw(st.floats(4.0, 14.0)))
     return shapely.orient_polygons(hull)  # type: ignore[no-any-return]
 
 
@@ -48,8 +52,9 @@ def test_a_square_round_tills_its_corners() -> None:
     # about 1.2 m² at each corner; the loops leave nothing.
     field = shapely.box(0.0, 0.0, 20.0, 20.0)
     ring = round_of(field, 2.0)
+    assert ring is not None
     allowed = field.buffer(-0.425)
-    looped = corner_loops(ring, PIVOT_M, allowed, round_step_m(PIVOT_M))
+    looped = corner_loops(ring, radius_m=PIVOT_M, allowed=allowed, step_m=round_step_m(PIVOT_M))
     band = field.difference(field.buffer(-4.0, join_style="mitre"))
     before = band.difference(band_footprint(ring, 4.0)).area
     after = band.difference(band_footprint(looped, 4.0)).area
@@ -62,17 +67,32 @@ def test_no_loop_where_the_body_would_leave() -> None:
     # The round 0.5 m inside (a 1 m interval): a loop would swing 0.7 m towards the bund.
     field = shapely.box(0.0, 0.0, 20.0, 20.0)
     ring = round_of(field, 0.5)
-    looped = corner_loops(ring, PIVOT_M, field.buffer(-0.425), round_step_m(PIVOT_M))
+    assert ring is not None
+    looped = corner_loops(
+        ring, radius_m=PIVOT_M, allowed=field.buffer(-0.425), step_m=round_step_m(PIVOT_M)
+    )
     assert looped is ring
+
+
+def test_a_strip_whose_round_is_a_finger_is_planned() -> None:
+    # 40 m × 5 m at 4 m: the round's region is 1 m wide, its ends turn 180° each (a
+    # loop's legs once reached 74,355 km there and the plan ran out of memory).
+    from planner.spiral import order_spiral
+
+    for width in (4.75, 5.0, 12.75):
+        plan = order_spiral(shapely.box(0.0, 0.0, 40.0, width), interval_m=4.0)
+        assert 0.97 < plan.coverage_ratio <= 1.0
 
 
 @SETTINGS
 @given(field=convex_fields(), offset=st.floats(1.0, 4.0))
 def test_loops_keep_inside_bend_no_tighter_and_lose_nothing(field: Polygon, offset: float) -> None:
     ring = round_of(field, offset)
+    assume(ring is not None and len(ring) >= 6)
+    assert ring is not None
     allowed = field.buffer(-0.425)
     step = round_step_m(PIVOT_M)
-    looped = corner_loops(ring, PIVOT_M, allowed, step)
+    looped = corner_loops(ring, radius_m=PIVOT_M, allowed=allowed, step_m=step)
     path = np.vstack([looped, looped[:1]])
     assert shapely.covers(allowed.buffer(1e-9), LineString(path))
     assert (np.hypot(*np.diff(path, axis=0).T) <= step + 1e-9).all()
