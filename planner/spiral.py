@@ -305,7 +305,7 @@ class _Joiner:
         self.radius = radius
         self.step = round_step_m(radius)
         self.loops = loops  # corner loops (planner.round_corners) in every round
-        #: Every round's points as driven (once round and on to where it is left), in order.
+        #: The rounds as driven, in pieces that do not overlap themselves, in order.
         self.driven: list[FloatArray] = []
         #: The round being driven, its points from the entry on, and its round index.
         self.ring: FloatArray | None = None
@@ -397,7 +397,11 @@ class _Joiner:
         n = len(self.ring)
         along = self.ring[np.arange(n + extra + 1) % n]
         self.route.append("round", self.ring_index, along, "headland")
-        self.driven.append(along)
+        # Once round from the entry (closed: GEOS fills the inside of a line that overlaps
+        # itself, 2,672 m² for a 1,133 m² round of rwanda_2021-6), then on past the entry.
+        self.driven.append(along[: n + 1])
+        if extra:
+            self.driven.append(along[n : n + extra + 1])
         if curve is not None and len(curve) > 1:
             self.route.append("turn", None, curve, "turn", last_role=last_role)  # type: ignore[arg-type]
 

@@ -9,7 +9,7 @@ import numpy as np
 import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from shapely import Polygon
+from shapely import LineString, Polygon
 
 from planner import parse_field_geojson, plan_coverage
 from planner.export import plan_to_geojson
@@ -41,9 +41,17 @@ def spiral_coverage(plan: CoveragePlan) -> float:
     field_local = field_frame(plan.field_lonlat).to_local(plan.field_lonlat)
     half = plan.interval_m / 2
     pieces = [line.buffer(half, cap_style="flat") for line in local_segments(plan, "line")]
-    pieces += [
-        r.buffer(half, cap_style="flat", join_style="mitre") for r in local_segments(plan, "round")
-    ]
+    # A round drives on past its entry: buffered as one line that overlaps itself, GEOS fills
+    # its inside, so each is buffered once round (closed) and then the part past the entry.
+    for r in local_segments(plan, "round"):
+        xy = np.asarray(r.coords)
+        again = np.nonzero((xy[1:] == xy[0]).all(axis=1))[0]
+        cuts = [xy] if not len(again) else [xy[: again[0] + 2], xy[again[0] + 1 :]]
+        pieces += [
+            LineString(c).buffer(half, cap_style="flat", join_style="mitre")
+            for c in cuts
+            if len(c) >= 2
+        ]
     if not pieces:
         return 0.0
     covered = shapely.intersection(field_local, shapely.union_all(pieces))
