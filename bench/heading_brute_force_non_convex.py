@@ -27,20 +27,14 @@ from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK
 from tests.conftest import field_from_local
 from tests.planner.random_fields import star_field
+from tests.planner.test_heading_rule_non_convex import CASES, LOSS_SHARE
 
 #: The 1° grid of fixed headings [deg].
 GRID_DEG = np.arange(0.0, 180.0, 1.0)
 #: The searched plan may be this much longer than the brute force (the test's LOSS_SHARE) [%].
-LOSS_PCT = 1.0
+LOSS_PCT = LOSS_SHARE * 100.0
 #: The test file's cases: (vertices, seed, size [m], holes asked for, interval [m]).
-TEST_CASES = [
-    (10, 2212568278, 334.8615342348589, 2, 18.13),
-    (9, 1850753208, 230.22401567130785, 3, 12.41),
-    (6, 4255028923, 78.40930496557849, 1, 2.81),
-    (8, 1123361780, 251.0792911278842, 1, 8.62),
-    (13, 4110225764, 202.1527627324664, 3, 11.82),
-    (16, 401347228, 401.4893937441768, 1, 40.07),
-]
+TEST_CASES = [tuple(case.values) for case in CASES]
 
 
 @dataclass(frozen=True, slots=True)

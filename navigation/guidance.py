@@ -130,34 +130,15 @@ def waypoint_law(
 ) -> tuple[int, float, float]:
     """:func:`waypoint_command` as ``(clutch, heading_error_deg, distance_m)``, for the 10 Hz loop.
 
-    :func:`haversine_m` and :func:`bearing_deg` written out together: they share the
-    latitudes' radians and cosines, and the floats are theirs exactly (same operations in
-    the same order).
-
     Examples
     --------
     >>> clutch, error, distance = waypoint_law(0.0, 0.0, 0.0, 0.001, 0.0, tolerance_deg=8.0)
     >>> clutch, round(error, 6), round(distance, 1)     # due east: turn right
     (1, 90.0, 111.2)
     """
-    phi1 = math.radians(lat)
-    phi2 = math.radians(target_lat)
-    dlmb = math.radians(target_lon - lon)
-    cos1 = math.cos(phi1)
-    cos2 = math.cos(phi2)
-    a = math.sin(0.5 * (phi2 - phi1)) ** 2 + cos1 * cos2 * math.sin(0.5 * dlmb) ** 2
-    distance = 2.0 * EARTH_RADIUS_M * math.atan2(math.sqrt(a), math.sqrt(1.0 - a))
-    x = cos2 * math.sin(dlmb)
-    y = cos1 * math.sin(phi2) - math.sin(phi1) * cos2 * math.cos(dlmb)
-    bearing = math.degrees(math.atan2(x, y)) % 360.0
-    error = (bearing - heading_deg + 180.0) % 360.0 - 180.0
-    if error > tolerance_deg:
-        clutch = RIGHT
-    elif error < -tolerance_deg:
-        clutch = LEFT
-    else:
-        clutch = STRAIGHT
-    return clutch, error, distance
+    distance = haversine_m(lon, lat, target_lon, target_lat)
+    error = heading_error_deg(bearing_deg(lon, lat, target_lon, target_lat), heading_deg)
+    return clutch_for(error, tolerance_deg=tolerance_deg), error, distance
 
 
 def segment_progress(

@@ -38,9 +38,14 @@ def inner_parts(
     else:
         depth = first_pass_offset_m(interval_m, vehicle_width_m) + (passes - 0.5) * interval_m
         inner = field_local.buffer(-max(depth, half), join_style="mitre")
+    return polygon_parts(inner)
+
+
+def polygon_parts(geometry: shapely.Geometry) -> list[Polygon]:
+    """Return the polygons of ``geometry`` bar slivers, oriented, largest first."""
     parts = [
         shapely.orient_polygons(p)
-        for p in shapely.get_parts(inner)
+        for p in shapely.get_parts(geometry)
         if isinstance(p, Polygon) and p.area > _SLIVER_M2
     ]
     parts.sort(key=lambda p: (-p.area, p.bounds))

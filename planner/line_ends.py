@@ -190,8 +190,8 @@ class _Lines(NamedTuple):
     """The lines :func:`fit_lines` fits, in driving order (sweep frame [m])."""
 
     u: FloatArray
-    a: FloatArray  # where each starts (v)
-    b: FloatArray  # where each ends (v)
+    v_start: FloatArray
+    v_end: FloatArray
     up: BoolArray  # whether it runs towards +v
     line_index: IntArray  # its left-to-right index, carried through
 
@@ -199,7 +199,13 @@ class _Lines(NamedTuple):
 def _fit_once(k: IntArray, turns: _TurnStore) -> tuple[FittedLines, BoolArray]:
     """One fitting round on the lines ``k``: the fitted lines, and which to drop before the next."""
     lines, machine = turns.lines, turns.machine
-    u, a, b, up, index = lines.u[k], lines.a[k], lines.b[k], lines.up[k], lines.line_index[k]
+    u, a, b, up, index = (
+        lines.u[k],
+        lines.v_start[k],
+        lines.v_end[k],
+        lines.up[k],
+        lines.line_index[k],
+    )
     n = len(u)
     if n < 2:
         return FittedLines(u, a, b, index, turns.empty), np.zeros(n, dtype=bool)
@@ -295,7 +301,7 @@ def _fit_turns(
     if planned is None:
         yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
         ends = TurnEnds(
-            u[first], lines.b[first], yaw[first], u[second], lines.a[second], yaw[second]
+            u[first], lines.v_end[first], yaw[first], u[second], lines.v_start[second], yaw[second]
         )
         curves = vehicle_turns(ends, vehicle)
     else:

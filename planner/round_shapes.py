@@ -17,6 +17,7 @@ import shapely
 from shapely import LinearRing, MultiPolygon, Polygon
 from shapely.geometry.base import BaseGeometry
 
+from planner.headlands import polygon_parts
 from planner.turns import SAGITTA_M, STEP_M
 
 FloatArray = npt.NDArray[np.float64]
@@ -158,17 +159,6 @@ def _curvatures(points: FloatArray, *, turning_step_m: float | None = None) -> F
     else:
         curvature = 2.0 * np.abs(cross) / np.maximum(l1 * l2 * np.hypot(*(c - a).T), 1e-300)
     return np.asarray(curvature, dtype=float)
-
-
-def polygon_parts(geometry: shapely.Geometry) -> list[Polygon]:
-    """Return the polygons of ``geometry`` bar slivers, oriented, largest first."""
-    parts = [
-        shapely.orient_polygons(p)
-        for p in shapely.get_parts(geometry)
-        if isinstance(p, Polygon) and p.area > SLIVER_M2
-    ]
-    parts.sort(key=lambda p: (-p.area, p.bounds))
-    return parts
 
 
 def resample_ring(ring: LinearRing, step_m: float) -> FloatArray:

@@ -41,12 +41,12 @@ from shapely import LinearRing, MultiPolygon, Polygon
 from planner import general
 from planner.errors import InvalidParameterError
 from planner.general import RouteBuilder
+from planner.headlands import polygon_parts
 from planner.line_ends import machine_area
 from planner.round_corners import corner_loops
 from planner.round_shapes import (
     QUAD_SEGS,
     RADIUS_SLACK,
-    polygon_parts,
     resample_ring,
     round_parts,
     round_step_m,
