@@ -90,6 +90,64 @@ def test_every_bulk_path_stores_each_timestamp_once(engine: Engine, size: int):
         assert headings[:3] == [0.0, 1.0, 2.0]
 
 
+def varied_fixes(n: int) -> list[TrackFix]:
+    """``n`` fixes whose optional values are each missing in some fixes, in different ones."""
+    qualities = [None, "rtk_fixed", "rtk_float", "dgps", "single", "dead_reckoning"]
+    rng = np.random.default_rng(11)
+    lat = -8.6 + rng.random(n) * 1e-3
+    return [
+        TrackFix(
+            t=T0 + i * 100_000,
+            lat=float(lat[i]),
+            lon=115.3 + i * 1e-9,
+            heading_deg=None if i % 3 == 0 else float(rng.random() * 360),
+            speed_mps=None if i % 5 == 0 else 0.56 + i * 1e-6,
+            quality=qualities[i % len(qualities)],
+            hdop=None if i % 7 == 0 else 0.1 * (i % 40),
+            satellites=None if i % 4 == 1 else i % 30,
+        )
+        for i in range(n)
+    ]
+
+
+@pytest.mark.parametrize(
+    ("size", "new_run"),
+    [(10, False), (ingest.COPY_MIN_ROWS + 10, False), (ingest.COPY_MIN_ROWS + 10, True)],
+)
+def test_every_bulk_path_stores_the_values_given(engine: Engine, size: int, new_run: bool):
+    """Each path (``executemany``, ``COPY`` through a temporary table, ``COPY`` into a new run)
+    stores every value exactly (floats to the last bit) and a missing one as NULL."""
+    given = varied_fixes(size)
+    with Session(engine, expire_on_commit=False) as session:
+        plan = a_plan(session)
+        if new_run:
+            run = runs.create_run_from_columns(
+                session, plan, ingest.collect(given), source="csv", report={}, name="u"
+            )
+        else:
+            run = a_run(session, plan)
+            write(session, lambda s: ingest.store_fixes(s, run.id, ingest.collect(given)))
+        stored = session.execute(
+            select(
+                Fix.t,
+                Fix.lat,
+                Fix.lon,
+                Fix.heading_deg,
+                Fix.speed_mps,
+                Fix.quality,
+                Fix.hdop,
+                Fix.satellites,
+            )
+            .where(Fix.run_id == run.id)
+            .order_by(Fix.t)
+        ).all()
+        session.commit()
+    assert [tuple(row) for row in stored] == [
+        (f.t, f.lat, f.lon, f.heading_deg, f.speed_mps, f.quality, f.hdop, f.satellites)
+        for f in given
+    ]
+
+
 def stored_count(session: Session, run_id: int) -> tuple[int, int]:
     """The run row's ``fix_count`` and the fixes counted."""
     kept = session.scalar(select(Run.fix_count).where(Run.id == run_id))
