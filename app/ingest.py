@@ -5,10 +5,10 @@ An upload is parsed as a stream (:func:`app.tracks.read_track`) into :class:`Fix
 sorted by time with one fix per timestamp, before any write. Then the columns are stored in
 one short transaction through the database's bulk path:
 
-- **PostgreSQL**: ``COPY`` (psycopg's ``Cursor.copy``) straight into ``fixes`` for a run made
-  in the same transaction (it has no fix yet, and the columns hold one fix per timestamp), else
-  into a temporary table, then ``INSERT INTO fixes … SELECT … ON CONFLICT (run_id, t) DO
-  NOTHING``;
+- **PostgreSQL**: binary ``COPY`` (psycopg's ``Cursor.copy``) straight into ``fixes`` for a
+  run made in the same transaction (it has no fix yet, and the columns hold one fix per
+  timestamp), else into a temporary table, then ``INSERT INTO fixes … SELECT … ON CONFLICT
+  (run_id, t) DO NOTHING``;
 - **SQLite**: the driver's ``executemany`` of ``INSERT … ON CONFLICT DO NOTHING``, in the
   same transaction.
 
@@ -210,9 +210,7 @@ def store_fixes(session: Session, run_id: int, fixes: FixColumns, *, new_run: bo
     cursor: Any = dbapi_connection.cursor()  # the driver's own (executemany takes iterators)
     try:
         if dialect == "postgresql" and new_run:
-            with cursor.copy(f"COPY fixes ({names}) FROM STDIN") as copy:
-                for row in fixes.rows(run_id, columns):
-                    copy.write_row(row)
+            _copy_binary(cursor, "fixes", names, fixes.rows(run_id, columns))
             stored = len(fixes)
         elif dialect == "postgresql" and len(fixes) >= COPY_MIN_ROWS:
             stored = _copy_postgresql(cursor, names, fixes.rows(run_id, columns))
@@ -240,9 +238,7 @@ def _copy_postgresql(cursor: Any, names: str, rows: Iterator[tuple[Any, ...]]) -
     cursor.execute(
         "CREATE TEMPORARY TABLE fixes_load (LIKE fixes INCLUDING DEFAULTS) ON COMMIT DROP"
     )
-    with cursor.copy(f"COPY fixes_load ({names}) FROM STDIN") as copy:
-        for row in rows:
-            copy.write_row(row)
+    _copy_binary(cursor, "fixes_load", names, rows)
     cursor.execute(
         f"INSERT INTO fixes ({names}) SELECT {names} FROM fixes_load "
         "ON CONFLICT (run_id, t) DO NOTHING"
@@ -250,3 +246,20 @@ def _copy_postgresql(cursor: Any, names: str, rows: Iterator[tuple[Any, ...]]) -
     stored = int(cursor.rowcount)
     cursor.execute("DROP TABLE fixes_load")
     return stored
+
+
+def _copy_binary(cursor: Any, table: str, names: str, rows: Iterator[tuple[Any, ...]]) -> None:
+    """``COPY`` ``rows`` into ``table``'s columns ``names`` in the binary format.
+
+    Binary, because the server then reads each number as it is stored instead of parsing its
+    text, and psycopg sends it without formatting it (216,000 fixes: 0.12 s of client CPU, was
+    0.36 s). The binary format does not say the types, so they are read from the table itself
+    (a query for no row): whatever migration made the columns, each value is sent as its
+    column's type.
+    """
+    cursor.execute(f"SELECT {names} FROM {table} LIMIT 0")
+    types = [column.type_code for column in cursor.description]
+    with cursor.copy(f"COPY {table} ({names}) FROM STDIN (FORMAT BINARY)") as copy:
+        copy.set_types(types)
+        for row in rows:
+            copy.write_row(row)
