@@ -3,7 +3,7 @@
 Pure and seeded: a plan, a :class:`SimulationConfig` and an ``np.random.Generator`` in, a
 :class:`SimulationLog` with metrics out. :func:`score_track` scores any track (simulated or
 recorded) against a plan. Modules: ``types``, ``vehicle``, ``sensors``, ``compass``,
-``filters``, ``guidance``, ``simulator``, ``metrics``, ``export``, ``plot`` (import it
+``filters``, ``guidance``, ``curves``, ``simulator``, ``metrics``, ``export``, ``plot`` (import it
 explicitly: it loads matplotlib).
 """
 
