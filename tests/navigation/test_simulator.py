@@ -134,7 +134,7 @@ def test_a_plan_with_no_waypoints_is_refused(paper_plan) -> None:  # type: ignor
 
 
 def test_the_simulator_drives_the_plans_vehicle(paper_plan) -> None:  # type: ignore[no-untyped-def]
-    from navigation.simulator import plan_vehicle_params
+    from navigation.config import plan_vehicle_params
 
     # A plan without a vehicle is driven by hand_tractor: 0.7 m track, π/4 rad/s pivots.
     default = plan_vehicle_params(paper_plan)
