@@ -76,7 +76,9 @@ class SimulationLog:
     clutch : int array
         Clutch engaged at each step (-1 left, 0 none, 1 right).
     target : int array
-        Index of the waypoint being steered to at each step.
+        Index of the waypoint ending the leg being driven at each step: the one steered to,
+        but the line's end while the tractor, past it by the acceptance radius, drives on to
+        the start of the curve that follows.
     gps_time_s, gps_x_m, gps_y_m : arrays
         The GPS fixes.
     reached_s : array
@@ -457,7 +459,13 @@ def simulate(
         log_ey.append(ey)
         log_eh.append(eh)
         log_cl.append(t_clutch)
-        log_tg.append(min(target, n_wp - 1))
+        # A line's end is reached 1 m early, the paper's way; the turn after it is followed
+        # from its start, so the tractor drives on to the line's end: until it gets there,
+        # the leg it drives is still the line.
+        if target < n_wp and on_curve[target] and along < 0.0 and not on_curve[target - 1]:
+            log_tg.append(target - 1)
+        else:
+            log_tg.append(min(target, n_wp - 1))
         if completed or k == n_steps:
             break
 
