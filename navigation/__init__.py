@@ -3,8 +3,8 @@
 Pure and seeded: a plan, a :class:`SimulationConfig` and an ``np.random.Generator`` in, a
 :class:`SimulationLog` with metrics out. :func:`score_track` scores any track (simulated or
 recorded) against a plan. Modules: ``types``, ``vehicle``, ``sensors``, ``compass``,
-``filters``, ``guidance``, ``simulator``, ``metrics``, ``export``, ``plot`` (import it
-explicitly: it loads matplotlib).
+``filters``, ``guidance``, ``curves``, ``config``, ``simulator``, ``metrics``, ``export``,
+``plot`` (import it explicitly: it loads matplotlib).
 """
 
 from navigation.metrics import Stretch, TrackMetrics, score_track

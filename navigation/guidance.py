@@ -212,10 +212,43 @@ def pursuit_law(
         s = min(max(along_m, 0.0) + lookahead_m, length_m) / length_m
         aim_x = ax_m + s * (bx_m - ax_m)
         aim_y = ay_m + s * (by_m - ay_m)
-    target_deg = math.degrees(math.atan2(aim_x - x_m, aim_y - y_m))
+    clutch, error = aim_law(x_m, y_m, heading_rad, aim_x, aim_y, tolerance_deg=tolerance_deg)
+    return clutch, error, math.hypot(bx_m - x_m, by_m - y_m)
+
+
+def aim_law(
+    x_m: float,
+    y_m: float,
+    heading_rad: float,
+    aim_x_m: float,
+    aim_y_m: float,
+    *,
+    tolerance_deg: float,
+) -> tuple[int, float]:
+    """Steer toward an aim point: ``(clutch, heading_error_deg)``, for the 10 Hz loop.
+
+    The step pursuit shares, along a segment (:func:`pursuit_law`) or along a curve of the
+    plan (:func:`navigation.curves.aim_point`): for a tractor that can only drive straight or
+    pivot, pursuing a point is steering toward it within a heading tolerance.
+
+    Parameters
+    ----------
+    x_m, y_m, heading_rad : float
+        Pose, local frame ([m], clockwise from true north [rad]).
+    aim_x_m, aim_y_m : float
+        The point pursued [m].
+    tolerance_deg : float
+        Heading error within which the tractor drives straight [deg].
+
+    Examples
+    --------
+    >>> clutch, error = aim_law(0.0, 0.0, 0.0, 1.0, 1.0, tolerance_deg=3.0)
+    >>> clutch, round(error, 6)                       # aim north-east: turn right
+    (1, 45.0)
+    """
+    target_deg = math.degrees(math.atan2(aim_x_m - x_m, aim_y_m - y_m))
     error = heading_error_deg(target_deg, math.degrees(heading_rad))
-    distance = math.hypot(bx_m - x_m, by_m - y_m)
-    return clutch_for(error, tolerance_deg=tolerance_deg), error, distance
+    return clutch_for(error, tolerance_deg=tolerance_deg), error
 
 
 def pure_pursuit_command(

@@ -6,6 +6,10 @@ command; the clutch servo applies it after its delay; the tractor moves (with wh
 heading disturbance); the filter predicts with the command the controller knows it gave. The
 true, measured and estimated states are logged side by side.
 
+The plan's curves (turns, rounds, corner loops: legs of 0.5 m or less) are followed by pursuit
+along the path, their points passed abeam (:mod:`navigation.curves`); the paper's law, with its
+acceptance radius, keeps the tillage lines and the other legs.
+
 The run ends when the last waypoint is reached (``completed``) or the time limit passes
 (``completed`` false): never a hang.
 """
@@ -21,37 +25,24 @@ import numpy as np
 import numpy.typing as npt
 
 from navigation.compass import compass_heading_deg, magnetic_declination_deg
+from navigation.config import plan_vehicle_params, validate_config
 from navigation.consistency import chi2_mean_bounds, normalised_squares
+from navigation.curves import MIN_AIM_M, aim_point, curve_path
 from navigation.filters import PoseFilter, augmented_x0
-from navigation.guidance import pursuit_law, segment_axes, waypoint_law
+from navigation.guidance import aim_law, pursuit_law, segment_axes, waypoint_law
 from navigation.metrics import TrackMetrics, line_waypoints, optional_tuple, score_track
-from navigation.sensors import (
-    GpsReceiver,
-    gps_params,
-    read_compass,
-    read_magnetometer,
-    validate_compass,
-)
-from navigation.types import (
-    GUIDANCE_MODES,
-    STRAIGHT,
-    GpsParams,
-    NavigationError,
-    SimulationConfig,
-    VehicleParams,
-    VehicleState,
-)
+from navigation.sensors import GpsReceiver, read_compass, read_magnetometer
+from navigation.types import STRAIGHT, NavigationError, SimulationConfig, VehicleState
 from navigation.vehicle import (
     TWO_PI,
     disturb_heading,
+    servo_motion,
     step_pose,
     turn_geometry,
     validate_vehicle,
-    vehicle_params_for,
 )
 from planner.projection import LocalFrame, field_frame
 from planner.types import CoveragePlan
-from planner.vehicles import resolve_vehicle
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -85,7 +76,9 @@ class SimulationLog:
     clutch : int array
         Clutch engaged at each step (-1 left, 0 none, 1 right).
     target : int array
-        Index of the waypoint being steered to at each step.
+        Index of the waypoint ending the leg being driven at each step: the one steered to,
+        but the line's end while the tractor, past it by the acceptance radius, drives on to
+        the start of the curve that follows.
     gps_time_s, gps_x_m, gps_y_m : arrays
         The GPS fixes.
     reached_s : array
@@ -161,60 +154,6 @@ def _linearised_lonlat(
         return lon + dlon_dx * dx + dlon_dy * dy, lat + dlat_dx * dx + dlat_dy * dy
 
     return lonlat_near
-
-
-def plan_vehicle_params(plan: CoveragePlan) -> VehicleParams:
-    """Return the simulator's tractor for ``plan``: its vehicle (default ``hand_tractor``)."""
-    return vehicle_params_for(resolve_vehicle(getattr(plan, "vehicle", None)))
-
-
-def validate_config(config: SimulationConfig) -> GpsParams:
-    """Check ``config``; return its GPS model.
-
-    Raises
-    ------
-    NavigationError
-        Naming the first bad setting.
-    """
-    if config.vehicle is not None:
-        validate_vehicle(config.vehicle)
-    validate_compass(config.compass)
-    gps = gps_params(config.gps)
-    g = config.guidance
-    if g.mode not in GUIDANCE_MODES:
-        raise NavigationError(
-            "guidance", f"unknown mode {g.mode!r}; choose one of {', '.join(GUIDANCE_MODES)}"
-        )
-    for name in ("heading_tolerance_deg", "line_tolerance_deg"):
-        value = getattr(g, name)
-        if not (math.isfinite(value) and 0.0 < value < 90.0):
-            raise NavigationError(name, f"must be in (0, 90) degrees, got {value}")
-    for name in ("acceptance_radius_m", "line_acceptance_radius_m"):
-        value = getattr(g, name)
-        if not (math.isfinite(value) and 0.0 < value <= 50.0):
-            raise NavigationError(name, f"must be in (0, 50] m, got {value}")
-    if not (math.isfinite(g.lookahead_m) and 0.0 < g.lookahead_m <= 100.0):
-        raise NavigationError("lookahead_m", f"must be in (0, 100] m, got {g.lookahead_m}")
-    if not (math.isfinite(config.dt_s) and 0.001 <= config.dt_s <= 1.0):
-        raise NavigationError("dt_s", f"must be in [0.001, 1] s, got {config.dt_s}")
-    if config.time_limit_s is not None and not (
-        math.isfinite(config.time_limit_s) and config.time_limit_s > 0
-    ):
-        raise NavigationError("time_limit_s", f"must be > 0, got {config.time_limit_s}")
-    k = config.kalman
-    if not (
-        k.position_sigma_m_per_sqrt_s > 0 and k.heading_sigma_deg_per_sqrt_s > 0
-    ):  # NaN fails too
-        raise NavigationError("kalman", "process noise sigmas must be > 0")
-    if not (
-        math.isfinite(config.initial_heading_sigma_deg)
-        and 0.0 <= config.initial_heading_sigma_deg <= 180.0
-    ):
-        raise NavigationError(
-            "initial_heading_sigma_deg",
-            f"must be in [0, 180], got {config.initial_heading_sigma_deg}",
-        )
-    return gps
 
 
 def simulate(
@@ -370,6 +309,23 @@ def simulate(
         for i in range(1, n_wp)
     ]
     accept_m = line_radius if line_mode else radius
+    # The plan's curves (turns, rounds, corner loops) are followed by pursuit along the path
+    # in both modes (navigation.curves); the paper's law keeps the lines and sparse legs.
+    curves = curve_path(
+        wp_x,
+        wp_y,
+        [w.role for w in plan.waypoints],
+        [w.line for w in plan.waypoints],
+        bend_rad=math.radians(guid.curve_bend_deg),
+        lookahead_m=guid.lookahead_m,
+    )
+    on_curve = curves.on_curve
+    stop = curves.stop
+    tol_curve = guid.curve_tolerance_deg
+    # On a curve the controller steers from the pose its commands in the servo will have
+    # brought the tractor to: 0.3 s is 0.17 m, half a corner loop's radius. Memoised per
+    # servo content, in the tractor's frame.
+    servo_pose: dict[tuple[int, ...], tuple[float, float]] = {}
     # The true state as floats: x, y, heading, engaged clutch.
     tx_m, ty_m, th_rad, t_clutch = state.x_m, state.y_m, state.heading_rad, state.clutch
 
@@ -428,42 +384,72 @@ def simulate(
         while True:
             ax, ay, bx, by, ux, uy, length = legs[target]
             along = (ex - ax) * ux + (ey - ay) * uy  # segment_progress's along-track [m]
-            if lonlat_near is None:  # line mode
-                cmd_clutch, _, distance = pursuit_law(
-                    ex,
-                    ey,
-                    eh_pred,
-                    ax,
-                    ay,
-                    bx,
-                    by,
-                    along,
-                    length,
-                    lookahead_m=guid.lookahead_m,
-                    tolerance_deg=tol_line,
-                )
-            else:
-                lon, lat = lonlat_near(target, ex, ey)
-                cmd_clutch, _, distance = waypoint_law(
-                    lon,
-                    lat,
-                    math.degrees(eh_pred),
-                    wp_lons[target],
-                    wp_lats[target],
-                    tolerance_deg=tol_wp,
-                )
-            if along >= length or distance <= accept_m:
-                reached[target] = t
-                est_wp_err[target] = math.hypot(ex - bx, ey - by)
-                target += 1
-                if on_waypoint is not None:
-                    on_waypoint(target, n_wp)
-                if target == n_wp:
-                    completed = True
+            if on_curve[target]:
+                # A curve's point is passed abeam; a line end, the start or the finish is
+                # also reached within the acceptance radius, the paper's way.
+                if along < length and not (
+                    stop[target] and math.hypot(bx - ex, by - ey) <= accept_m
+                ):
+                    moved = servo_pose.get(servo)
+                    if moved is None:
+                        moved = servo_pose[servo] = servo_motion(
+                            servo,
+                            dt_s,
+                            speed_mps=speed,
+                            track_width_m=track,
+                            yaw_rate_rad_s=omega_turn,
+                            pivot_m=pivot,
+                        )[:2]
+                    sin_h = math.sin(eh)
+                    cos_h = math.cos(eh)
+                    px = ex + moved[0] * cos_h + moved[1] * sin_h
+                    py = ey - moved[0] * sin_h + moved[1] * cos_h
+                    aim_x, aim_y = aim_point(
+                        curves,
+                        legs,
+                        target,
+                        (px - ax) * ux + (py - ay) * uy,
+                        lookahead_m=guid.lookahead_m,
+                        min_aim_m=MIN_AIM_M,
+                    )
+                    clutch = aim_law(px, py, eh_pred, aim_x, aim_y, tolerance_deg=tol_curve)[0]
                     break
-                continue
-            clutch = cmd_clutch
-            break
+            else:
+                if lonlat_near is None:  # line mode
+                    cmd_clutch, _, distance = pursuit_law(
+                        ex,
+                        ey,
+                        eh_pred,
+                        ax,
+                        ay,
+                        bx,
+                        by,
+                        along,
+                        length,
+                        lookahead_m=guid.lookahead_m,
+                        tolerance_deg=tol_line,
+                    )
+                else:
+                    lon, lat = lonlat_near(target, ex, ey)
+                    cmd_clutch, _, distance = waypoint_law(
+                        lon,
+                        lat,
+                        math.degrees(eh_pred),
+                        wp_lons[target],
+                        wp_lats[target],
+                        tolerance_deg=tol_wp,
+                    )
+                if along < length and distance > accept_m:
+                    clutch = cmd_clutch
+                    break
+            reached[target] = t
+            est_wp_err[target] = math.hypot(ex - bx, ey - by)
+            target += 1
+            if on_waypoint is not None:
+                on_waypoint(target, n_wp)
+            if target == n_wp:
+                completed = True
+                break
 
         log_t.append(t)
         log_tx.append(tx_m)
@@ -473,7 +459,13 @@ def simulate(
         log_ey.append(ey)
         log_eh.append(eh)
         log_cl.append(t_clutch)
-        log_tg.append(min(target, n_wp - 1))
+        # A line's end is reached 1 m early, the paper's way; the turn after it is followed
+        # from its start, so the tractor drives on to the line's end: until it gets there,
+        # the leg it drives is still the line.
+        if target < n_wp and on_curve[target] and along < 0.0 and not on_curve[target - 1]:
+            log_tg.append(target - 1)
+        else:
+            log_tg.append(min(target, n_wp - 1))
         if completed or k == n_steps:
             break
 

@@ -243,7 +243,14 @@ class GuidanceParams:
         estimate passes the perpendicular through it, so a near miss never makes the tractor
         circle back (as ArduPilot does).
     lookahead_m : float
-        Pure-pursuit look-ahead along the segment (line mode) [m].
+        Pure-pursuit look-ahead along the segment (line mode), and along a curve (both
+        modes) [m].
+    curve_tolerance_deg : float
+        Heading error within which the tractor drives straight on a curve of the plan (a
+        turn, a round, a corner loop), in both modes (:mod:`navigation.curves`) [deg].
+    curve_bend_deg : float
+        On a curve, the aim looks no further ahead than where the path has bent by this much
+        from the leg being driven [deg].
     """
 
     mode: GuidanceMode = "waypoint"
@@ -252,6 +259,8 @@ class GuidanceParams:
     acceptance_radius_m: float = 1.0
     line_acceptance_radius_m: float = 1.0
     lookahead_m: float = 2.5
+    curve_tolerance_deg: float = 3.0
+    curve_bend_deg: float = 30.0
 
 
 @dataclass(frozen=True, slots=True)

@@ -185,6 +185,48 @@ def step_pose(
     return px + rx * c + ry * s, py - rx * s + ry * c, (heading_rad + dtheta) % TWO_PI
 
 
+def servo_motion(
+    commands: tuple[int, ...],
+    dt_s: float,
+    *,
+    speed_mps: float,
+    track_width_m: float,
+    yaw_rate_rad_s: float,
+    pivot_m: float,
+) -> tuple[float, float, float]:
+    """Where ``commands``, one a step, take the tractor, in its own frame at their start.
+
+    What the controller predicts of the commands still in the clutch servo (no slip, no
+    ground): the pose they will have brought the tractor to when a new command acts.
+
+    Returns
+    -------
+    (float, float, float)
+        Displacement to the right and forward [m], and the turn, clockwise [rad, ±π].
+
+    Examples
+    --------
+    >>> right, forward, turn = servo_motion((RIGHT, RIGHT), 1.0, speed_mps=0.5,
+    ...     track_width_m=0.7, yaw_rate_rad_s=math.pi / 4, pivot_m=0.35)
+    >>> round(right, 6), round(forward, 6), round(math.degrees(turn), 6)  # 90° about the wheel
+    (0.35, 0.35, 90.0)
+    """
+    x_m = y_m = heading_rad = 0.0
+    for clutch in commands:
+        x_m, y_m, heading_rad = step_pose(
+            x_m,
+            y_m,
+            heading_rad,
+            clutch,
+            dt_s,
+            speed_mps=speed_mps,
+            track_width_m=track_width_m,
+            yaw_rate_rad_s=yaw_rate_rad_s,
+            pivot_m=pivot_m,
+        )
+    return x_m, y_m, wrap_angle(heading_rad)
+
+
 def disturb(
     state: VehicleState, rng: np.random.Generator, dt_s: float, *, yaw_noise_deg_per_sqrt_s: float
 ) -> VehicleState:
@@ -245,6 +287,7 @@ __all__ = [
     "STRAIGHT",
     "disturb",
     "disturb_heading",
+    "servo_motion",
     "step",
     "step_pose",
     "turn_geometry",

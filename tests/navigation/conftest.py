@@ -114,3 +114,16 @@ def two_line_plan() -> CoveragePlan:
 def make_plan():  # type: ignore[no-untyped-def]
     """The :func:`hand_plan` builder, for tests that need their own shapes."""
     return hand_plan
+
+
+@pytest.fixture(scope="session")
+def paper_spiral() -> CoveragePlan:
+    """The paper's field at 4 m as a spiral: two rounds, a corner loop at each right angle."""
+    spec = parse_field_geojson(json.loads(PAPER_FIELD.read_text(encoding="utf-8")))
+    return plan_coverage(
+        spec.field_lonlat,
+        interval_m=4.0,
+        start_lonlat=spec.start_lonlat,
+        finish_lonlat=spec.finish_lonlat,
+        pattern="spiral",
+    )
