@@ -181,6 +181,11 @@ class HeadingChoice:
         only) or the heading needs more than :data:`MAX_LINES` lines.
     scored_variants : ndarray or None
         The shortest variant at each.
+    scored_lengths : ndarray or None
+        The shortest variant's path length at each, as the scorer gave it and rounded as the
+        search ranks them [m].
+    scored_line_counts : ndarray or None
+        Lines at each.
     """
 
     heading_deg: float
@@ -194,6 +199,8 @@ class HeadingChoice:
     scored_headings: FloatArray | None = None
     scored_coverage: FloatArray | None = None
     scored_variants: IntArray | None = None
+    scored_lengths: FloatArray | None = None
+    scored_line_counts: IntArray | None = None
 
 
 def coverage_eligible(coverage: FloatArray) -> npt.NDArray[np.bool_]:
@@ -333,6 +340,8 @@ def search_headings(
         pool.headings,
         np.where(pool.counts <= MAX_LINES, pool.coverage, np.nan),
         pool.tied.argmin(axis=1),  # as of the rounded lengths: × _TIE_M keeps their order
+        pool.tied.min(axis=1),
+        pool.counts,
     )
 
 

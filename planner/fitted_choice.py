@@ -6,7 +6,10 @@ boundary, in closed form at hundreds of headings. A vehicle's lines end where it
 turn cannot fit is left out, so a heading's real coverage can fall well below its score (the
 paper field at 1 m: 86.2 % at 1°, 85.2 % at the searched heading). The search's choice and
 its best-covering alternatives are therefore fitted in full, and the rule is applied to what
-the vehicle will really cover: no heading more than 0.2 pp below the best of them.
+the vehicle will really cover: no heading more than 0.2 pp below the best of them. Shorter
+headings that the estimate rules out by less than the slack are fitted too (the estimate's
+error between headings is of that order), and a field whose estimate fails is fitted at
+every scored heading, then at 0.1° around the shortest that keeps the rule.
 """
 
 from __future__ import annotations
@@ -19,7 +22,14 @@ import numpy.typing as npt
 import shapely
 from shapely import Polygon
 
-from planner.angles import COVERAGE_SLACK, HeadingChoice, LengthScorer, candidate_headings
+from planner.angles import (
+    COVERAGE_SLACK,
+    REFINE_STEP_DEG,
+    HeadingChoice,
+    LengthScorer,
+    candidate_headings,
+    tied_lengths,
+)
 from planner.convex_fits import convex_machine_area, fit_headings
 from planner.errors import InvalidParameterError
 from planner.heading_coverage import convex_coverage
@@ -100,7 +110,8 @@ def choose_convex(
     -------
     FittedChoice
         The search's choice if its fitted coverage is within 0.2 pp of the best fitted
-        alternative's, else the alternative within the rule that the objective prefers.
+        alternative's and no shorter fitted heading keeps the rule, else the fitted heading
+        within the rule that the objective prefers.
 
     Examples
     --------
@@ -193,9 +204,38 @@ def choose_convex(
                 checked.append(fitted(heading, variant))
             except InvalidParameterError:
                 continue
+        near = _near_misses(choice, estimated_best, objective)
+        if near:
+            # Shorter headings the estimate ranks just beyond the rule: fitted, and the rule
+            # is held on what they really cover.
+            fits = fitted_many([h for h, _ in near], [k for _, k in near])
+            checked += [f for f in fits if not isinstance(f, InvalidParameterError)]
+            bound_m2 = max(c.covered_m2 for c in [first, *checked]) - slack_m2
+            if any(
+                c.covered_m2 >= bound_m2 and _key(c, objective) < _key(first, objective)
+                for c in checked
+            ):
+                # One would win: the rule's bound from the best-covering alternatives too.
+                done = {c.heading_deg for c in [first, *checked]}
+                more = [a for a in choice.alternatives if a[0] not in done]
+                fits = fitted_many([h for h, _ in more], [k for _, k in more]) if more else []
+                checked += [f for f in fits if not isinstance(f, InvalidParameterError)]
         best_checked = max((c.covered_m2 for c in checked), default=0.0)
         if first.covered_m2 >= best_checked - slack_m2:
+            if near:
+                best_m2 = max(best_checked, first.covered_m2)
+                eligible = [c for c in [first, *checked] if c.covered_m2 >= best_m2 - slack_m2]
+                picked = min(eligible, key=lambda c: _key(c, objective))
+                if picked is not first:
+                    lost_pp = max(best_m2 - picked.covered_m2, 0.0) / area * 100.0
+                    return FittedChoice(picked, lost_pp)
             lost_pp = max(best_checked - first.covered_m2, 0.0) / area * 100.0
+            return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
+        if near:
+            # The fitted alternatives cover more than the rule allows beyond the choice: the
+            # estimate's bound was wrong here. The choice stays (refitting every heading on
+            # each such field costs a fifth more CPU on small plots), and says what it gave up.
+            lost_pp = (best_checked - first.covered_m2) / area * 100.0
             return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
         beaten = True
     # Below the estimate's rule, beaten by a fitted alternative, or no turn fits the choice:
@@ -238,10 +278,28 @@ def choose_convex(
         if not checked:
             assert error is not None
             raise error
-        picked = checked[0]
-        if first is None or first.covered_m2 < best_m2 - slack_m2:
+        # The shortest heading that keeps the rule on fitted coverage, refined at 0.1° around
+        # it: the scored headings are a 1° sweep away from the search's seeds.
+        for _ in range(_REFINE_ROUNDS):
             eligible = [c for c in checked if c.covered_m2 >= best_m2 - slack_m2]
             picked = min(eligible, key=lambda c: _key(c, objective))
+            done = {c.heading_deg for c in checked}
+            centre = round(picked.heading_deg / REFINE_STEP_DEG) * REFINE_STEP_DEG
+            around = np.round((centre + _OFFSETS_DEG) % 180.0, 9)
+            around = around[np.isin(around, list(done), invert=True)]
+            # Only those the scorer ranks shorter than the choice can be shorter fitted.
+            scores, counts = lengths_of(np.append(around, picked.heading_deg))
+            tied = tied_lengths(scores)
+            key = _scored_key(tied.min(axis=1), counts, objective)
+            shorter = key[:-1] < key[-1]
+            if not shorter.any():
+                break
+            around, variants = around[shorter], tied[:-1][shorter].argmin(axis=1)
+            fits = fitted_many(around.tolist(), variants.tolist())
+            checked += [f for f in fits if not isinstance(f, InvalidParameterError)]
+            best_m2 = max(c.covered_m2 for c in checked)
+        eligible = [c for c in checked if c.covered_m2 >= best_m2 - slack_m2]
+        picked = min(eligible, key=lambda c: _key(c, objective))
         return FittedChoice(picked, max(best_m2 - picked.covered_m2, 0.0) / area * 100.0)
     # The search's estimate counts lines, not the slope of the boundary they end on, and on a
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
@@ -305,6 +363,46 @@ def _scored(choice: HeadingChoice) -> list[tuple[float, int, float]]:
     )
 
 
+def _near_misses(
+    choice: HeadingChoice, estimated_best: float, objective: Objective
+) -> list[tuple[float, int]]:
+    """Return the scored headings shorter than the choice that the estimate just rules out.
+
+    Their estimate is below the rule's bound by less than :data:`_NEAR_MISS` times the slack:
+    the estimate's error between headings is of that order, so their fitted coverage may
+    keep the rule. Each with its shortest variant; none for a choice built by hand.
+    """
+    if choice.scored_lengths is None or choice.scored_line_counts is None:
+        return []
+    assert choice.scored_headings is not None and choice.scored_coverage is not None
+    assert choice.scored_variants is not None
+    key = _scored_key(choice.scored_lengths, choice.scored_line_counts, objective)
+    at = np.nonzero(choice.scored_headings == choice.heading_deg)[0]
+    if len(at) == 0:
+        return []
+    estimate = np.where(np.isfinite(choice.scored_coverage), choice.scored_coverage, -np.inf)
+    bound = estimated_best - COVERAGE_SLACK - 1e-12
+    near = (estimate < bound) & (estimate >= bound - _NEAR_MISS * COVERAGE_SLACK)
+    near &= key < key[at[0]]
+    found = np.nonzero(near)[0]
+    return list(
+        zip(
+            choice.scored_headings[found].tolist(),
+            choice.scored_variants[found].tolist(),
+            strict=True,
+        )
+    )
+
+
+def _scored_key(
+    lengths_m: FloatArray, line_counts: npt.NDArray[np.int64], objective: Objective
+) -> FloatArray:
+    """Return what the objective ranks by, from the scorer's lengths: line count first."""
+    if objective == "fewest_lines":
+        return np.asarray(lengths_m + line_counts * 1e12)
+    return lengths_m
+
+
 def _doubtful_alternatives(
     choice: HeadingChoice,
     interval_m: float,
@@ -336,6 +434,13 @@ def _doubtful_alternatives(
     return doubtful
 
 
+#: Rounds of the 0.1° refinement round the fitted choice of a field whose estimate fails.
+_REFINE_ROUNDS = 3
+#: That refinement's sweep round its centre, five steps each side (half the 1° sweep) [deg].
+_OFFSETS_DEG = REFINE_STEP_DEG * np.arange(-5, 6)
+#: Shorter headings whose estimate is at most this many times the slack beyond the rule are
+#: fitted too, where the estimate holds.
+_NEAR_MISS = 1.0
 #: A choice below its estimate's rule on a field of at most this many lines is checked
 #: against its fitted alternatives rather than the edge-by-edge estimate.
 _FIT_ALTERNATIVES_MAX_LINES = 100
