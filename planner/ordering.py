@@ -163,6 +163,23 @@ def score_headings(
     counts : ndarray of int, shape (A,)
         Lines per heading.
     """
+    headings = np.asarray(headings_deg, dtype=float)
+    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
+    from planner import kernels  # numba: imported by the first plan that needs it
+
+    n, rows = kernels.length_aggregates(u_ring, v_ring, float(interval_m))
+    aggregates = HeadingAggregates(headings, n, *rows)
+    return combine_variants(aggregates, start_xy, finish_xy), n
+
+
+def convex_aggregates(
+    ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float
+) -> HeadingAggregates:
+    """:func:`score_headings`' aggregates in numpy: the reference for its compiled loop.
+
+    :func:`planner.kernels.length_aggregates` computes the same numbers one heading at a
+    time; ``tests/planner/test_kernels.py`` holds them equal bit for bit.
+    """
     d = float(interval_m)
     n_headings = len(headings_deg)
     m = len(ring_xy)
@@ -238,7 +255,7 @@ def score_headings(
     total += v_last
 
     A = n_headings  # noqa: N806 - the two chains' halves
-    aggregates = HeadingAggregates(
+    return HeadingAggregates(
         headings_deg=np.asarray(headings_deg, dtype=float),
         counts=n,
         working=total[A:] - total[:A],
@@ -253,7 +270,6 @@ def score_headings(
         lo_last=v_last[:A],
         hi_last=v_last[A:],
     )
-    return combine_variants(aggregates, start_xy, finish_xy), n
 
 
 def combine_variants(
