@@ -39,8 +39,15 @@ _F = TypeVar("_F", bound=Callable[..., object])
 
 
 def _jit(f: _F) -> _F:
-    """Compile ``f`` on first call, cached on disk; division by zero gives inf/NaN as numpy."""
-    return cast(_F, numba.njit(cache=True, error_model="numpy")(f))
+    """Compile ``f`` on first call, cached on disk; division by zero gives inf/NaN as numpy.
+
+    Where no cache directory is writable (numba raises at decoration), compile in memory:
+    slow to start, but the plan is the same.
+    """
+    try:
+        return cast(_F, numba.njit(cache=True, error_model="numpy")(f))
+    except RuntimeError:
+        return cast(_F, numba.njit(error_model="numpy")(f))
 
 
 @_jit
@@ -505,3 +512,15 @@ def length_aggregates(
         out,
     )
     return counts, out
+
+
+def warm_up() -> None:
+    """Compile the kernels, or load them from the disk cache, on a tiny ring.
+
+    For an image build (fill ``NUMBA_CACHE_DIR``) or a worker before its first plan: the
+    first call in a process with a cold cache compiles for seconds.
+    """
+    ring_u = np.array([[0.0, 2.0, 2.0, 0.0]])
+    ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
+    coverage_excess(ring_u, ring_v, 1.0)
+    length_aggregates(ring_u, ring_v, 1.0)
