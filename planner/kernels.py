@@ -390,6 +390,8 @@ def _length_aggregates(
     groups = np.empty(m, dtype=np.int64)
     slopes, intercepts = np.empty(m), np.empty(m)
     used = np.empty(m, dtype=np.int64)
+    keys = np.empty(m, dtype=np.int64)
+    picks = np.empty(m, dtype=np.int64)
     for h in range(n_headings):
         u_min = u_ring[h, 0]
         u_max = u_ring[h, 0]
@@ -442,19 +444,16 @@ def _length_aggregates(
             if k2s[i] - k1s[i] > 0 and k1s[i] == 0:
                 v_first[groups[i]] = intercepts[i] + slopes[i] * p0
         # Turns into an edge's first line from the edge before: edges by (chain, first line),
-        # a stable insertion sort (np.lexsort).
+        # stably (np.lexsort); a merge sort, as a chain runs against the ring's order.
         n_used = 0
         for i in range(n_edges):
             if k2s[i] - k1s[i] > 0:
-                j = n_used
-                while j > 0 and (
-                    groups[used[j - 1]] > groups[i]
-                    or (groups[used[j - 1]] == groups[i] and k1s[used[j - 1]] > k1s[i])
-                ):
-                    used[j] = used[j - 1]
-                    j -= 1
-                used[j] = i
+                keys[n_used] = groups[i] * (regular + 2) + k1s[i]
+                picks[n_used] = i
                 n_used += 1
+        order = np.argsort(keys[:n_used], kind="mergesort")
+        for j in range(n_used):
+            used[j] = picks[order[j]]
         even2 = [0.0, 0.0]
         odd2 = [0.0, 0.0]
         for j in range(1, n_used):
