@@ -139,6 +139,7 @@ def score_headings(
     interval_m: float,
     start_xy: tuple[float, float] | None,
     finish_xy: tuple[float, float] | None,
+    sweep: tuple[FloatArray, FloatArray] | None = None,
 ) -> tuple[VariantLengths, IntArray]:
     """Score the four variants at every heading in O(vertices) per heading.
 
@@ -156,6 +157,8 @@ def score_headings(
     headings_deg : ndarray, shape (A,)
     interval_m : float
     start_xy, finish_xy : tuple of float or None
+    sweep : tuple of ndarray, optional
+        ``to_sweep`` of the ring at ``headings_deg[:, None]``, if the caller has it already.
 
     Returns
     -------
@@ -164,7 +167,9 @@ def score_headings(
         Lines per heading.
     """
     headings = np.asarray(headings_deg, dtype=float)
-    u_ring, v_ring = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
+    if sweep is None:
+        sweep = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
+    u_ring, v_ring = sweep
     from planner import kernels  # numba: imported by the first plan that needs it
 
     n, rows = kernels.length_aggregates(u_ring, v_ring, float(interval_m))
