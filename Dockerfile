@@ -40,10 +40,15 @@ RUN pip install --no-deps /tmp/dist/*.whl && rm -rf /tmp/dist
 
 # Run unprivileged; the default SQLite database (no TILLPATH_DATABASE_URL) goes to /app/data.
 RUN useradd --create-home --uid 10001 tillpath \
-    && mkdir -p /app/data \
-    && chown tillpath:tillpath /app/data
+    && mkdir -p /app/data /app/numba-cache \
+    && chown tillpath:tillpath /app/data /app/numba-cache
 WORKDIR /app
 USER tillpath
+# The planner's numba kernels, compiled once here (seconds) rather than by every new
+# container's first plan; site-packages is not writable for this user, so numba needs a
+# directory it can write (and find again).
+ENV NUMBA_CACHE_DIR=/app/numba-cache
+RUN python -c "from planner.kernels import warm_up; warm_up()"
 
 EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=30s --retries=3 \

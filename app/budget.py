@@ -3,15 +3,16 @@
 Plain fields (the real ones have at most a few hundred vertices) are planned in the request's
 thread, as fast as ever. A field past :data:`INLINE_MAX_VERTICES` vertices or
 :data:`INLINE_MAX_HOLES` holes is planned in a child process (multiprocessing's
-``forkserver``, which forks from a clean process that has the planner imported) with a
-deadline: a plan that would take longer than ``Settings.planning_budget_s`` is stopped and
-answered 422, naming the limit. The command line (``tillpath plan``) has no budget.
+``forkserver``, which forks from a clean process that has the planner and its kernels
+loaded) with a deadline: a plan that would take longer than ``Settings.planning_budget_s`` is
+stopped and answered 422, naming the limit. The command line (``tillpath plan``) has no budget.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import multiprocessing.connection
+import threading
 import time
 from typing import Any, Final
 
@@ -26,21 +27,44 @@ INLINE_MAX_VERTICES: Final = 400
 INLINE_MAX_HOLES: Final = 10
 
 _context = multiprocessing.get_context("forkserver")
-_context.set_forkserver_preload(["planner"])
+# app.preload loads the compiled kernels, so that no child pays for it out of its budget.
+_context.set_forkserver_preload(["planner", "app.preload"])
 
 
-def warm_up() -> None:
-    """Start the fork server in the background, so the first large field does not wait for it.
+def _nothing() -> None:
+    """Do nothing (in a child: starting one waits until the fork server is ready)."""
 
-    Starting it imports the planner in a fresh interpreter (about a second); a request that
-    paid for it would spend most of its budget there.
+
+def _warm_up() -> None:
+    from planner import kernels
+
+    # The fork server first, and this process's kernels once it is ready: with a cold numba
+    # cache the fork server compiles them (about 9 s of CPU, once per install) and this
+    # process then loads them from the cache instead of compiling them a second time.
+    child = _context.Process(target=_nothing, daemon=True)
+    child.start()
+    child.join()
+    child.close()
+    kernels.warm_up()
+
+
+def warm_up() -> threading.Thread:
+    """Start the fork server and load the planner's kernels, in a background thread.
+
+    Join the thread before serving, so that no request waits for them: the fork server
+    imports the planner and its kernels in a fresh interpreter (about 1.5 s), which a large
+    field's request would otherwise spend out of its budget, and the kernels take about
+    0.35 s to load in this process (:mod:`planner.kernels`; seconds to compile where their
+    cache is cold, as after a fresh install).
+
+    Returns
+    -------
+    threading.Thread
+        The started thread.
     """
-    import multiprocessing.forkserver
-    import threading
-
-    threading.Thread(
-        target=multiprocessing.forkserver.ensure_running, name="forkserver-warm-up", daemon=True
-    ).start()
+    thread = threading.Thread(target=_warm_up, name="planner-warm-up", daemon=True)
+    thread.start()
+    return thread
 
 
 class PlanningBudgetError(PlannerError):

@@ -281,6 +281,7 @@ def running_server(
     """
     if log is not None:
         log.write_bytes(b"")
+    warm_kernel_cache()
     server = ServerProcess(
         database_url, log=log, serve_args=serve_args, env=env, first_account=first_account
     )
@@ -288,6 +289,18 @@ def running_server(
         yield server.start(timeout_s=timeout_s)
     finally:
         server.stop()
+
+
+def warm_kernel_cache() -> None:
+    """Fill the planner's numba cache, if cold, before a test starts planning processes.
+
+    A fresh clone has no cache: the first process that plans compiles the kernels (about 9 s of
+    CPU, :mod:`planner.kernels`), and a server or CLI started by a test would do it while the
+    test's timeouts run. Compiled here once, they load from the cache in every process after.
+    """
+    from planner import kernels
+
+    kernels.warm_up()
 
 
 def _wait_for_health(

@@ -295,7 +295,9 @@ def search_headings(
             grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
             near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
             near = np.unique(near)  # sorted; then those not scored yet (np.setdiff1d, cheaper)
-            near = near[np.isin(near, pool.headings, invert=True)]
+            # A set of plain floats, not np.isin: a few hundred values, and isin sorts both.
+            scored = set(pool.headings.tolist())
+            near = near[np.fromiter((h not in scored for h in near.tolist()), bool, len(near))]
             near_lengths, near_counts = lengths_of(near) if len(near) else _no_scores(pool)
             pool = pool.extend(near, near_lengths, near_counts, np.full(len(near), np.nan))
             # Coverage for every scored heading that would beat the choice (the shortest

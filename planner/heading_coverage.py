@@ -65,12 +65,33 @@ def convex_coverage(
     """
     headings = np.asarray(headings_deg, dtype=float)
     d = float(interval_m)
-    n_headings = len(headings)
     m = len(ring_xy)
     x, y = ring_xy[:, 0], ring_xy[:, 1]
     nxt = np.arange(1, m + 1) % m  # np.r_ costs more than the rest of this line
     area = 0.5 * float(np.dot(x, y[nxt]) - np.dot(y, x[nxt]))
     u_ring, v_ring = to_sweep(x, y, headings[:, None]) if sweep is None else sweep
+    from planner import kernels  # numba: imported by the first plan that needs it
+
+    excess = kernels.coverage_excess(u_ring, v_ring, d)
+    if excess is None:  # a ring the kernel cannot vouch for
+        excess = convex_excess(u_ring, v_ring, d)
+    return np.asarray(np.clip(1.0 - excess / area, 0.0, 1.0))
+
+
+def convex_excess(u_ring: FloatArray, v_ring: FloatArray, d: float) -> FloatArray:
+    """Area a convex cell's lines miss at every heading [m²]: :func:`convex_coverage`'s core.
+
+    The reference for :func:`planner.kernels.coverage_excess`, which computes the same
+    numbers in a compiled loop.
+
+    Parameters
+    ----------
+    u_ring, v_ring : ndarray, shape (A, m)
+        The ring in the sweep frame of each heading (:func:`planner.lines.to_sweep`).
+    d : float
+        Interval [m].
+    """
+    n_headings, m = u_ring.shape
     u_ring = u_ring - u_ring.min(axis=1, keepdims=True)  # every heading's cell starts at 0
     width = u_ring.max(axis=1)
     n = line_counts(width, d)
@@ -158,7 +179,7 @@ def convex_coverage(
         np.concatenate([centre, u_b]),
         np.concatenate([np.ones(len(part_h)), weight]),
     )
-    return np.asarray(np.clip(1.0 - excess / area, 0.0, 1.0))
+    return excess
 
 
 def _interleave(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[Any]:

@@ -139,6 +139,7 @@ def score_headings(
     interval_m: float,
     start_xy: tuple[float, float] | None,
     finish_xy: tuple[float, float] | None,
+    sweep: tuple[FloatArray, FloatArray] | None = None,
 ) -> tuple[VariantLengths, IntArray]:
     """Score the four variants at every heading in O(vertices) per heading.
 
@@ -156,12 +157,33 @@ def score_headings(
     headings_deg : ndarray, shape (A,)
     interval_m : float
     start_xy, finish_xy : tuple of float or None
+    sweep : tuple of ndarray, optional
+        ``to_sweep`` of the ring at ``headings_deg[:, None]``, if the caller has it already.
 
     Returns
     -------
     lengths : VariantLengths
     counts : ndarray of int, shape (A,)
         Lines per heading.
+    """
+    headings = np.asarray(headings_deg, dtype=float)
+    if sweep is None:
+        sweep = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
+    u_ring, v_ring = sweep
+    from planner import kernels  # numba: imported by the first plan that needs it
+
+    n, rows = kernels.length_aggregates(u_ring, v_ring, float(interval_m))
+    aggregates = HeadingAggregates(headings, n, *rows)
+    return combine_variants(aggregates, start_xy, finish_xy), n
+
+
+def convex_aggregates(
+    ring_xy: FloatArray, headings_deg: FloatArray, interval_m: float
+) -> HeadingAggregates:
+    """:func:`score_headings`' aggregates in numpy: the reference for its compiled loop.
+
+    :func:`planner.kernels.length_aggregates` computes the same numbers one heading at a
+    time; ``tests/planner/test_kernels.py`` holds them equal bit for bit.
     """
     d = float(interval_m)
     n_headings = len(headings_deg)
@@ -238,7 +260,7 @@ def score_headings(
     total += v_last
 
     A = n_headings  # noqa: N806 - the two chains' halves
-    aggregates = HeadingAggregates(
+    return HeadingAggregates(
         headings_deg=np.asarray(headings_deg, dtype=float),
         counts=n,
         working=total[A:] - total[:A],
@@ -253,7 +275,6 @@ def score_headings(
         lo_last=v_last[:A],
         hi_last=v_last[A:],
     )
-    return combine_variants(aggregates, start_xy, finish_xy), n
 
 
 def combine_variants(

@@ -177,15 +177,26 @@ def plan_coverage(
     ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
     headings = angles.candidate_headings(ring_xy, fixed_heading)
 
+    # The ring rotated to the last headings scored: the search scores the coarse candidates
+    # for length and then for coverage, the same array; one rotation serves both.
+    rotated: list[tuple[FloatArray, tuple[FloatArray, FloatArray]]] = []
+
+    def sweep_of(headings: FloatArray) -> tuple[FloatArray, FloatArray]:
+        if rotated and rotated[0][0] is headings:
+            return rotated[0][1]
+        sweep = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])
+        rotated[:] = [(headings, sweep)]
+        return sweep
+
     def lengths_of(headings: FloatArray) -> tuple[VariantLengths, IntArray]:
-        return score_headings(ring_xy, headings, interval, start_xy, finish_xy)
+        return score_headings(ring_xy, headings, interval, start_xy, finish_xy, sweep_of(headings))
 
     field_m2 = float(field_local.area)
 
     def coverage_of(headings: FloatArray) -> FloatArray:
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
-        sweep = to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None])  # rotated once
+        sweep = sweep_of(headings)
         widths = np.ptp(sweep[0], axis=1)
         loss = fitting_loss_m2(machine, interval, line_counts(widths, interval), widths) / field_m2
         return convex_coverage(ring_xy, headings, interval, sweep) - loss

@@ -158,6 +158,7 @@ def run_batch(
     from app.cli.batch_read import iter_field_chunks, open_fields
     from app.cli.batch_tasks import plan_records
     from app.jobs.engine import start_local_cluster
+    from app.jobs.kernels_plugin import KernelWarmUp
 
     source = open_fields(fields, layer=layer)
     # The scheduler runs in this process: its INFO lines would drown the progress bar.
@@ -168,6 +169,7 @@ def run_batch(
     cluster = None if scheduler else start_local_cluster(workers)
     client = Client(scheduler or cluster, set_as_default=False)
     try:
+        client.register_plugin(KernelWarmUp())  # once per worker, not per task
         n_workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
         limit = IN_FLIGHT_PER_WORKER * n_workers
         pending = as_completed(loop=client.loop)

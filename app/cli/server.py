@@ -120,6 +120,8 @@ def register(cli: typer.Typer) -> None:
             fail(f"{exc}; install the locked version (pip install -r requirements.lock)")
         from app.jobs.engine import start_local_cluster
 
+        # The fork server and the planner's kernels load while the database migrates.
+        warming = warm_up()
         shown = upgrade()
         scheme = "https" if certfile else "http"
         typer.echo(f"database {shown} is up to date; serving on {scheme}://{host}:{port}", err=True)
@@ -134,7 +136,9 @@ def register(cli: typer.Typer) -> None:
                 "(or run `tillpath users create NAME --password-stdin`)",
                 err=True,
             )
-        warm_up()
+        if warming.is_alive():
+            typer.echo("loading the planner (after an install it compiles, once: ~10 s)", err=True)
+        warming.join()  # so that no request waits for it
         cluster = None
         settings = get_settings()
         if workers > 1 and settings.dask_scheduler is None:

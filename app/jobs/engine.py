@@ -110,6 +110,9 @@ class JobEngine:
             self.client = Client(
                 self.scheduler_address, timeout=CONNECT_TIMEOUT_S, set_as_default=False
             )
+        from app.jobs.kernels_plugin import KernelWarmUp
+
+        self.client.register_plugin(KernelWarmUp())
         self.sweep()
         self._sweeper = threading.Thread(target=self._sweep_loop, name="job-sweep", daemon=True)
         self._sweeper.start()

@@ -19,6 +19,7 @@ from pyproj import Transformer
 
 from app.cli.batch import run_batch
 from app.cli.batch_read import BatchInputError, iter_field_chunks, open_fields
+from app.jobs.kernels_plugin import NAME
 from tests.conftest import FIELDS_DIR
 
 TILLPATH = [sys.executable, "-c", "from app.cli import main; main()"]
@@ -171,8 +172,11 @@ def test_run_batch_streams_many_fields_on_a_cluster(tmp_path: Path, dask_schedul
         profiles = client.run(
             lambda dask_worker: (len(dask_worker.profile_history), dask_worker.profile_recent)
         )
-    for history, recent in profiles.values():
-        assert history == 0 and recent["count"] == 0, (history, recent["count"])
+        for history, recent in profiles.values():
+            assert history == 0 and recent["count"] == 0, (history, recent["count"])
+        # The planner's kernels are loaded once per worker (a plugin), not by each task.
+        plugins = client.run(lambda dask_worker: list(dask_worker.plugins))
+    assert all(NAME in names for names in plugins.values()), plugins
 
 
 def test_unreadable_input_and_bad_output_are_errors_with_status_2(tmp_path: Path) -> None:

@@ -1,0 +1,34 @@
+"""A Dask worker plugin that loads the planner's compiled kernels once per worker.
+
+Registered by the job engine and ``tillpath plan-batch`` on every worker, present and future
+(a restarted worker too), so a worker's first planning task does not pay for ``import numba``
+and the kernels' disk cache (about 0.35 s), or their compile where the cache is cold (seconds,
+:mod:`planner.kernels`). They load in a background thread: the worker is ready at once, and a
+task that plans before they are loaded waits for them.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Final
+
+from distributed.diagnostics.plugin import WorkerPlugin
+
+#: The plugin's name on the workers: registering it again replaces it instead of adding one.
+NAME: Final = "tillpath-planner-kernels"
+
+
+def _warm_up() -> None:
+    from planner import kernels
+
+    kernels.warm_up()
+
+
+class KernelWarmUp(WorkerPlugin):
+    """Load :mod:`planner.kernels` in a background thread when a worker starts."""
+
+    name = NAME
+
+    def setup(self, worker: Any) -> None:
+        """Start loading the kernels; return at once."""
+        threading.Thread(target=_warm_up, name="planner-warm-up", daemon=True).start()
