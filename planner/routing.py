@@ -10,6 +10,7 @@ other is kept for later moves; :meth:`FieldRouter.distances` builds the whole gr
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 
@@ -84,10 +85,15 @@ class FieldRouter:
         # Whether two tangent corners see each other, by pair key (lo * n + hi), as
         # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
         self._seen: dict[int, bool] = {}
-        # Up to _DENSE_CORNERS corners, both tests of every pair met so far in one matrix
-        # instead (-1 not yet, 0 no, 1 tangent and in sight): fields' moves meet the same
-        # pairs again and again.
+        # Both tests of every pair met so far in one matrix instead (-1 not yet, 0 no, 1
+        # tangent and in sight), over up to _DENSE_CORNERS corners numbered as queries meet
+        # them (_slot; -1 not met): fields' moves meet the same pairs again and again, and a
+        # jagged field's next move the pairs of the last. When more corners are met, the
+        # matrix starts afresh.
         self._states: npt.NDArray[np.int8] | None = None
+        self._slot = np.empty(0, dtype=np.int64)
+        self._met: list[IntArray] = []
+        self._slots_used = 0
         self._graph: csr_matrix | None = None
 
     def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
@@ -261,8 +267,12 @@ class FieldRouter:
         ``see_a[k]``, ``see_b[k]``: whether ``a``, ``b`` see corner ``subset[k]``.
         """
         s = len(subset)
-        i, j = np.triu_indices(s, k=1)
-        keep = self._seen_pairs(subset[i], subset[j])
+        i, j = _pairs(s)
+        slots = self._slots(subset)
+        if slots is None:
+            keep = self._seen_pairs(subset[i], subset[j])
+        else:
+            keep = self._seen_slot_pairs(subset[i], subset[j], slots[i], slots[j])
         i, j = i[keep], j[keep]
         length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
         # Nodes 0 … s-1 the corners, s the start, s+1 the end.
@@ -283,20 +293,54 @@ class FieldRouter:
         corners = subset[np.asarray(chain[1:-1], dtype=np.int64)]
         return np.vstack([a, self.nodes[corners], b]), distance
 
+    def _slots(self, corners: IntArray) -> IntArray | None:
+        """Slots of ``corners`` (distinct) in the pair matrix, new ones given slots.
+
+        None if they are more than the matrix holds (that query is cached by pair key).
+        """
+        size = min(len(self.nodes), _DENSE_CORNERS)
+        if len(corners) > size:
+            return None
+        if self._states is None:
+            self._states = np.full((size, size), -1, dtype=np.int8)
+            self._slot = np.full(len(self.nodes), -1, dtype=np.int64)
+        slots = self._slot[corners]
+        new = corners[slots < 0]
+        if len(new) == 0:
+            return slots
+        if self._slots_used + len(new) > size:
+            # Full: start afresh (pairs met again are tested again, with the same answers).
+            for met in self._met:
+                self._slot[met] = -1
+            self._met.clear()
+            self._states.fill(-1)
+            self._slots_used = 0
+            new = corners
+        self._slot[new] = self._slots_used + np.arange(len(new))
+        self._slots_used += len(new)
+        self._met.append(new)
+        return self._slot[corners]
+
+    def _seen_slot_pairs(
+        self, i: IntArray, j: IntArray, slot_i: IntArray, slot_j: IntArray
+    ) -> npt.NDArray[np.bool_]:
+        """:meth:`_seen_pairs` by the pair matrix: corners ``i, j`` in ``slot_i, slot_j``."""
+        assert self._states is not None
+        known = self._states[slot_i, slot_j]
+        new = np.nonzero(known < 0)[0]
+        if len(new):
+            i, j = i[new], j[new]
+            state = self._tangent_pairs(i, j).astype(np.int8)
+            tangent = np.nonzero(state)[0]
+            if len(tangent):
+                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
+            self._states[slot_i[new], slot_j[new]] = state
+            self._states[slot_j[new], slot_i[new]] = state
+            known[new] = state
+        return np.asarray(known == 1)
+
     def _seen_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
         """Whether corners ``i[k]`` and ``j[k]`` are tangent and see each other (cached)."""
-        if self._states is not None:
-            known = self._states[i, j]
-            new = np.nonzero(known < 0)[0]
-            if len(new):
-                i, j = i[new], j[new]
-                state = self._tangent_pairs(i, j).astype(np.int8)
-                tangent = np.nonzero(state)[0]
-                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
-                self._states[i, j] = state
-                self._states[j, i] = state
-                known[new] = state
-            return np.asarray(known == 1)
         ok = self._tangent_pairs(i, j)
         where = np.nonzero(ok)[0]
         if len(where) == 0:
@@ -354,8 +398,6 @@ class FieldRouter:
         to_prev /= np.hypot(*to_prev.T)[:, None]
         to_next /= np.hypot(*to_next.T)[:, None]
         self._xy = np.ascontiguousarray(self.nodes.T)
-        if len(self.nodes) <= _DENSE_CORNERS:
-            self._states = np.full((len(self.nodes), len(self.nodes)), -1, dtype=np.int8)
         self._around = np.ascontiguousarray(np.hstack([to_prev, to_next]).T)
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
@@ -444,6 +486,15 @@ class FieldRouter:
         length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
         self._graph = csr_matrix((length, (i, j)), shape=(n, n))
         return self._graph
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(count: int) -> tuple[IntArray, IntArray]:
+    """``np.triu_indices(count, k=1)``, read-only and shared: queries ask for the same sizes."""
+    i, j = np.triu_indices(count, k=1)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
 
 
 def _swap_xy(xy: FloatArray) -> FloatArray:
