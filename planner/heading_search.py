@@ -171,15 +171,22 @@ def _score_block(
     turn_backs = np.zeros(len(headings_deg), dtype=np.int64)
     start = 0
     for m in sizes:
-        sign = np.sign(du[:, start : start + m])
+        ring_du = du[:, start : start + m]
         start += m
-        # Edges parallel to the lines take the direction of the edge before them.
-        idx = np.where(sign != 0, np.arange(m), -1)
-        idx = np.maximum.accumulate(idx, axis=1)
-        last_nonzero = idx[:, -1:]
-        idx = np.where(idx < 0, last_nonzero, idx)
-        filled = np.take_along_axis(sign, np.maximum(idx, 0), axis=1)
-        turn_backs += (filled != np.roll(filled, 1, axis=1)).sum(axis=1)
+        # Edges parallel to the lines take the direction of the edge before them, so the
+        # ring turns back where an edge's direction differs from the last non-parallel
+        # edge's before it (round the ring): compare each heading's non-parallel edges
+        # with their predecessors among them, the first with the last.
+        heading, _ = np.nonzero(ring_du)
+        forward = ring_du[ring_du != 0.0] > 0.0
+        if not len(forward):
+            continue
+        previous = np.empty_like(forward)
+        previous[1:] = forward[:-1]
+        ends = np.flatnonzero(np.diff(heading, append=-1))  # each heading's last edge
+        begins = np.concatenate(([0], ends[:-1] + 1))
+        previous[begins] = forward[ends]
+        turn_backs += np.bincount(heading[forward != previous], minlength=len(headings_deg))
     return HeadingScores(
         working_m=working,
         pieces=pieces,
