@@ -37,6 +37,9 @@ SNAP_M = 5e-3
 _FIRST_CORNERS = 32
 #: Corners up to which pair states are kept in a dense matrix (4 MB), beyond in a dict.
 _DENSE_CORNERS = 2048
+#: A pair of corners is left out of a search only if every path through it is this much
+#: longer than one found (the bound's rounding is some 1e-13 m) [m].
+_REACH_SLACK_M = 1e-6
 #: Sine below which a corner's neighbour counts as on a line through the corner.
 _COLLINEAR = 1e-9
 
@@ -200,6 +203,7 @@ class FieldRouter:
         count = min(n, _FIRST_CORNERS)
         see_a = np.empty(0, dtype=bool)
         see_b = np.empty(0, dtype=bool)
+        reach = math.inf
         while True:
             if count > len(order):
                 order, ranked, complete = self._by_bound(a, b, count)
@@ -209,9 +213,10 @@ class FieldRouter:
             # The subsets grow by their far end: see the new corners only.
             see_a = np.concatenate([see_a, self._visible_from(a, subset[len(see_a) :])])
             see_b = np.concatenate([see_b, self._visible_from(b, subset[len(see_b) :])])
-            found = self._subset_path(a, b, subset, see_a, see_b)
+            found = self._subset_path(a, b, subset, see_a, see_b, reach=reach)
             if found is not None:
                 need = found[1] + 1e-9
+                reach = need
                 if need >= complete:
                     order, ranked, complete = self._by_bound(a, b, count, reach=need)
                 enough = int(np.searchsorted(ranked, need, side="right"))
@@ -261,20 +266,38 @@ class FieldRouter:
         subset: IntArray,
         see_a: npt.NDArray[np.bool_],
         see_b: npt.NDArray[np.bool_],
+        *,
+        reach: float = math.inf,
     ) -> tuple[FloatArray, float] | None:
         """Shortest path from ``a`` to ``b`` through the corners ``subset`` only.
 
-        ``see_a[k]``, ``see_b[k]``: whether ``a``, ``b`` see corner ``subset[k]``.
+        ``see_a[k]``, ``see_b[k]``: whether ``a``, ``b`` see corner ``subset[k]``. A path no
+        longer than ``reach`` is known: a pair of corners that no path through both could
+        keep within it (``|a − i| + |i − j| + |j − b|`` beyond it, either way round) is no
+        edge of the shortest path, nor ties with one, so it is not tested at all: the last,
+        largest subset of a search tests a fraction of its pairs.
         """
         s = len(subset)
         i, j = _pairs(s)
+        pair_m = None
+        if reach < math.inf:
+            corner_xy = self.nodes[subset]
+            from_a = np.hypot(*(corner_xy - a).T)
+            to_b = np.hypot(*(corner_xy - b).T)
+            pair_m = np.hypot(*(corner_xy[i] - corner_xy[j]).T)
+            bound = np.minimum(from_a[i] + to_b[j], from_a[j] + to_b[i]) + pair_m
+            near = np.flatnonzero(bound <= reach + _REACH_SLACK_M)
+            i, j, pair_m = i[near], j[near], pair_m[near]
         slots = self._slots(subset)
         if slots is None:
             keep = self._seen_pairs(subset[i], subset[j])
         else:
             keep = self._seen_slot_pairs(subset[i], subset[j], slots[i], slots[j])
         i, j = i[keep], j[keep]
-        length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
+        if pair_m is None:
+            length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
+        else:
+            length = pair_m[keep]
         # Nodes 0 … s-1 the corners, s the start, s+1 the end.
         ia, ib = np.nonzero(see_a)[0], np.nonzero(see_b)[0]
         rows = np.concatenate([i, np.full(len(ia), s), ib])
