@@ -158,19 +158,40 @@ def add_cells(
             continue
         # Lines the turns could not reach are gone: number the rest left to right.
         rank = np.argsort(np.argsort(fit.index, kind="stable"), kind="stable")
-        fit = replace(fit, index=(first_index + rank).astype(np.int64))
-        fitted.append(fit)
-        x0, y0 = from_sweep(fit.u[0], fit.v_start[0], heading)
-        target = (float(x0), float(y0))
-        here = route.here()
-        joined = False
-        if here is not None and route.roles[-1] != "start":
-            rising = bool(fit.v_end[0] >= fit.v_start[0])
-            move = move_between_cells(route, target, rising, heading, router, vehicle)
-            route.append("turn", None, move, "turn")
-            joined = True
-        add_fitted_lines(route, heading, fit, joined=joined)
+        fitted.append(replace(fit, index=(first_index + rank).astype(np.int64)))
         first_index += len(fit.u)
+    driven = [fit for fit in fitted if len(fit.u)]
+    if not driven:
+        return fitted
+    # Every move between cells at once (a jagged field has a thousand): from the last
+    # line's end of one cell (the line's start before it) to the first line's start of the
+    # next; the first from wherever the route is, unless it only holds the start point.
+    first_u = np.array([fit.u[0] for fit in driven])
+    first_v = np.array([fit.v_start[0] for fit in driven])
+    last_u = np.array([fit.u[-1] for fit in driven])
+    x0, y0 = from_sweep(first_u, first_v, heading)
+    x1, y1 = from_sweep(last_u, np.array([fit.v_end[-1] for fit in driven]), heading)
+    xb, yb = from_sweep(last_u, np.array([fit.v_start[-1] for fit in driven]), heading)
+    here = np.stack([x1[:-1], y1[:-1]], axis=1)
+    before = np.stack([xb[:-1], yb[:-1]], axis=1)
+    leaves_line = np.ones(len(driven) - 1, dtype=bool)
+    moved = route.here() is not None and route.roles[-1] != "start"
+    if moved:
+        here = np.vstack([[route.x[-1], route.y[-1]], here])
+        previous = [route.x[-2], route.y[-2]] if len(route.x) > 1 else [route.x[-1], route.y[-1]]
+        before = np.vstack([previous, before])
+        leaves_line = np.concatenate([[route.roles[-1] == "line_end"], leaves_line])
+    joins = slice(0 if moved else 1, None)
+    targets = np.stack([x0[joins], y0[joins]], axis=1)
+    rising = np.array([fit.v_end[0] >= fit.v_start[0] for fit in driven[joins]], dtype=bool)
+    moves = moves_between_cells(
+        here, before, leaves_line, targets, rising, heading=heading, router=router, vehicle=vehicle
+    )
+    if not moved:
+        add_fitted_lines(route, heading, driven[0])
+    for fit, move in zip(driven[joins], moves, strict=True):
+        route.append("turn", None, move, "turn")
+        add_fitted_lines(route, heading, fit, joined=True)
     return fitted
 
 
@@ -205,37 +226,73 @@ def room_chains(cell: Cell, room: Polygon | MultiPolygon | None) -> Chains:
     return cell.chains
 
 
-def move_between_cells(
-    route: RouteBuilder,
-    target: tuple[float, float],
-    up: bool,
+def moves_between_cells(
+    here_xy: FloatArray,
+    before_xy: FloatArray,
+    leaves_line: npt.NDArray[np.bool_],
+    target_xy: FloatArray,
+    up: npt.NDArray[np.bool_],
+    *,
     heading: float,
     router: FieldRouter,
     vehicle: Vehicle,
-) -> FloatArray:
-    """Plan the move from the route's last line end to another cell's first line start.
+) -> list[FloatArray]:
+    """Plan the moves from line ends to other cells' first line starts.
 
-    The vehicle's own turn (a Dubins or pivot curve from pose to pose) if it stays inside the
-    machine area, else the shortest path inside it, with points at most 0.5 m apart (its
-    corners are turned on the spot or as tight as the vehicle can).
+    Move ``k`` leaves ``here_xy[k]``, the end of the line from ``before_xy[k]`` (if
+    ``leaves_line[k]``), for ``target_xy[k]``, where a line runs along the heading (``up[k]``)
+    or against it. Each is the vehicle's own turn (a Dubins or pivot curve from pose to pose)
+    if it stays inside the machine area, else the shortest path inside it, with points at
+    most 0.5 m apart (its corners are turned on the spot or as tight as the vehicle can).
+    All turns are planned in one call and tested in another, the straight moves found in a
+    third (:meth:`planner.routing.FieldRouter.paths`): a turn depends on its own ends alone,
+    so the moves are those planned one by one.
+
+    Parameters
+    ----------
+    here_xy, before_xy, target_xy : ndarray, shape (k, 2)
+        Local [m].
+    leaves_line, up : ndarray of bool, shape (k,)
+    heading : float
+        Line heading [deg].
+    router : FieldRouter
+    vehicle : Vehicle
+
+    Returns
+    -------
+    list of ndarray
+        Each move's points, from ``here_xy[k]`` to ``target_xy[k]``, local [m].
     """
-    here = np.array([route.x[-1], route.y[-1]])
-    before = np.array([route.x[-2], route.y[-2]]) if len(route.x) > 1 else here
-    if route.roles[-1] == "line_end" and np.hypot(*(here - before)) > 1e-9:
-        yaw0 = math.atan2(here[1] - before[1], here[0] - before[0])
-        # Lines run along the heading: +v is (sin h, cos h) in local x, y.
-        theta = math.radians(heading)
-        along = math.atan2(math.cos(theta), math.sin(theta))
-        yaw1 = along if up else along + math.pi
+    count = len(here_xy)
+    # Lines run along the heading: +v is (sin h, cos h) in local x, y.
+    theta = math.radians(heading)
+    along = math.atan2(math.cos(theta), math.sin(theta))
+    turning = [
+        k for k in range(count) if leaves_line[k] and np.hypot(*(here_xy[k] - before_xy[k])) > 1e-9
+    ]
+    moves: list[FloatArray | None] = [None] * count
+    if turning:
         ends = TurnEnds(
-            np.array([here[0]]),
-            np.array([here[1]]),
-            np.array([yaw0]),
-            np.array([target[0]]),
-            np.array([target[1]]),
-            np.array([yaw1]),
+            here_xy[turning, 0],
+            here_xy[turning, 1],
+            np.array(
+                [
+                    math.atan2(here_xy[k, 1] - before_xy[k, 1], here_xy[k, 0] - before_xy[k, 0])
+                    for k in turning
+                ]
+            ),
+            target_xy[turning, 0],
+            target_xy[turning, 1],
+            np.array([along if up[k] else along + math.pi for k in turning]),
         )
-        curve = vehicle_turns(ends, vehicle).curve(0)
-        if len(curve) >= 2 and router.inside_path(curve):
-            return curve
-    return densify(router.path((float(here[0]), float(here[1])), target), STEP_M)
+        curves = vehicle_turns(ends, vehicle)
+        tried = [(k, curves.curve(t)) for t, k in enumerate(turning)]
+        tried = [(k, curve) for k, curve in tried if len(curve) >= 2]
+        inside = router.inside_paths([curve for _, curve in tried]).tolist()
+        for (k, curve), ok in zip(tried, inside, strict=True):
+            if ok:
+                moves[k] = curve
+    routed = [k for k in range(count) if moves[k] is None]
+    for k, path in zip(routed, router.paths(here_xy[routed], target_xy[routed]), strict=True):
+        moves[k] = densify(path, STEP_M)
+    return [move for move in moves if move is not None]

@@ -18,8 +18,6 @@ import numpy as np
 import numpy.typing as npt
 from shapely import Polygon
 
-from planner.lines import to_sweep
-
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
@@ -119,12 +117,16 @@ def score_headings(
     nxt = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
     sizes = [len(r) for r in rings]
     block = max(1, _BLOCK_VALUES // max(len(xy), 1))
+    # The blocks' arrays are written into the same buffers, kept for the whole search: made
+    # afresh for every block, the ~160 kB rows of a long boundary were each mapped from the
+    # kernel anew (glibc hands allocations above 128 kB back when freed): 217,000 page
+    # faults, 0.4 s of the wavy field's 0.7 s in a fresh process.
+    scratch = np.empty((_SCRATCH_ARRAYS, min(block, len(headings_deg)), len(xy)))
+    d, exteriors = float(interval_m), len(parts_local)
     if len(headings_deg) <= block:
-        return _score_block(xy, nxt, sizes, headings_deg, float(interval_m), len(parts_local))
+        return _score_block(xy, nxt, sizes, headings_deg, d, exteriors, scratch)
     scores = [
-        _score_block(
-            xy, nxt, sizes, headings_deg[a : a + block], float(interval_m), len(parts_local)
-        )
+        _score_block(xy, nxt, sizes, headings_deg[a : a + block], d, exteriors, scratch)
         for a in range(0, len(headings_deg), block)
     ]
     return HeadingScores(
@@ -137,6 +139,10 @@ def score_headings(
     )
 
 
+#: Arrays of a block's shape that :func:`_score_block` works in.
+_SCRATCH_ARRAYS = 11
+
+
 def _score_block(
     xy: FloatArray,
     nxt: FloatArray,
@@ -144,42 +150,102 @@ def _score_block(
     headings_deg: FloatArray,
     d: float,
     exteriors: int,
+    scratch: FloatArray,
 ) -> HeadingScores:
-    """:func:`score_headings` at a block of headings: every ring's vertices and their next."""
-    u1, v1 = to_sweep(xy[:, 0], xy[:, 1], headings_deg[:, None])
-    u2, v2 = to_sweep(nxt[:, 0], nxt[:, 1], headings_deg[:, None])
+    """:func:`score_headings` at a block of headings: every ring's vertices and their next.
+
+    ``scratch`` holds :data:`_SCRATCH_ARRAYS` arrays of at least the block's shape to work
+    in: each operation is the one on fresh arrays, in the same order (the same numbers).
+    """
+    rows = len(headings_deg)
+    u1, v1, u2, v2, lo, hi, k1, k2, du, slope, t = scratch[:, :rows]
+    theta = np.radians(headings_deg[:, None])
+    cos_t, sin_t = np.cos(theta), np.sin(theta)
+    for x, y, u, v in ((xy[:, 0], xy[:, 1], u1, v1), (nxt[:, 0], nxt[:, 1], u2, v2)):
+        # planner.lines.to_sweep: u = x cos - y sin, v = x sin + y cos.
+        np.multiply(x, cos_t, out=u)
+        np.multiply(y, sin_t, out=t)
+        np.subtract(u, t, out=u)
+        np.multiply(x, sin_t, out=v)
+        np.multiply(y, cos_t, out=t)
+        np.add(v, t, out=v)
     first = u1.min(axis=1, keepdims=True) + d / 2.0
     # Lines k = 0, 1, … at first + k·d; an edge from u_a to u_b (u_a < u_b) holds those with
-    # u_a <= u < u_b.
-    lo, hi = np.minimum(u1, u2), np.maximum(u1, u2)
-    k1 = np.maximum(np.ceil((lo - first) / d), 0.0)
-    k2 = np.maximum(np.ceil((hi - first) / d), 0.0)
-    count = k2 - k1
-    du = u2 - u1
+    # u_a <= u < u_b: k1 = max(ceil((u_a - first) / d), 0), k2 likewise.
+    np.minimum(u1, u2, out=lo)
+    np.maximum(u1, u2, out=hi)
+    for bound, k in ((lo, k1), (hi, k2)):
+        np.subtract(bound, first, out=k)
+        np.divide(k, d, out=k)
+        np.ceil(k, out=k)
+        np.maximum(k, 0.0, out=k)
+    count = np.subtract(k2, k1, out=lo)  # lo and hi are free from here on
+    np.subtract(u2, u1, out=du)
+    # slope = (v2 - v1) / du, 0 where du is.
+    np.subtract(v2, v1, out=slope)
     with np.errstate(divide="ignore", invalid="ignore"):
-        slope = np.where(du != 0.0, (v2 - v1) / du, 0.0)
-    sum_k = (k1 + k2 - 1.0) * count / 2.0
-    sum_v = count * v1 + slope * (count * (first - u1) + d * sum_k)
+        np.divide(slope, du, out=slope)
+    slope[du == 0.0] = 0.0
     entering = du > 0.0
-    working = np.where(entering, -sum_v, sum_v).sum(axis=1)
-    dv = np.abs(v2 - v1)
-    missed = np.minimum(count * np.abs(slope) * d * d / 8.0, dv * d / 2.0).sum(axis=1)
-    edge_m = np.hypot(u2 - u1, dv)
-    turns = np.minimum(count * d * np.sqrt(1.0 + slope * slope), edge_m).sum(axis=1) / 2.0
-    pieces = np.where(entering, count, 0.0).sum(axis=1).astype(np.int64)
+    # sum_k = (k1 + k2 - 1) count / 2; sum_v = count v1 + slope (count (first - u1) + d sum_k).
+    sum_k = np.add(k1, k2, out=k1)
+    np.subtract(sum_k, 1.0, out=sum_k)
+    np.multiply(sum_k, count, out=sum_k)
+    np.divide(sum_k, 2.0, out=sum_k)
+    np.multiply(sum_k, d, out=sum_k)
+    np.subtract(first, u1, out=t)
+    np.multiply(count, t, out=t)
+    np.add(t, sum_k, out=t)
+    np.multiply(slope, t, out=t)
+    sum_v = np.multiply(count, v1, out=hi)
+    np.add(sum_v, t, out=sum_v)
+    np.negative(sum_v, out=t, where=entering)
+    np.copyto(t, sum_v, where=~entering)
+    working = t.sum(axis=1)
+    # missed = min(count |slope| d d / 8, |v2 - v1| d / 2), summed.
+    dv = np.subtract(v2, v1, out=v1)
+    np.abs(dv, out=dv)
+    np.abs(slope, out=t)
+    np.multiply(count, t, out=t)
+    np.multiply(t, d, out=t)
+    np.multiply(t, d, out=t)
+    np.divide(t, 8.0, out=t)
+    np.multiply(dv, d, out=k2)
+    np.divide(k2, 2.0, out=k2)
+    np.minimum(t, k2, out=t)
+    missed = t.sum(axis=1)
+    # turns = min(count d sqrt(1 + slope²), hypot(u2 - u1, dv)), summed, halved.
+    edge_m = np.hypot(du, dv, out=u2)
+    np.multiply(slope, slope, out=t)
+    np.add(1.0, t, out=t)
+    np.sqrt(t, out=t)
+    np.multiply(count, d, out=k2)
+    np.multiply(k2, t, out=t)
+    np.minimum(t, edge_m, out=t)
+    turns = t.sum(axis=1) / 2.0
+    np.copyto(t, count)
+    t[~entering] = 0.0
+    pieces = t.sum(axis=1).astype(np.int64)
 
     turn_backs = np.zeros(len(headings_deg), dtype=np.int64)
     start = 0
     for m in sizes:
-        sign = np.sign(du[:, start : start + m])
+        ring_du = du[:, start : start + m]
         start += m
-        # Edges parallel to the lines take the direction of the edge before them.
-        idx = np.where(sign != 0, np.arange(m), -1)
-        idx = np.maximum.accumulate(idx, axis=1)
-        last_nonzero = idx[:, -1:]
-        idx = np.where(idx < 0, last_nonzero, idx)
-        filled = np.take_along_axis(sign, np.maximum(idx, 0), axis=1)
-        turn_backs += (filled != np.roll(filled, 1, axis=1)).sum(axis=1)
+        # Edges parallel to the lines take the direction of the edge before them, so the
+        # ring turns back where an edge's direction differs from the last non-parallel
+        # edge's before it (round the ring): compare each heading's non-parallel edges
+        # with their predecessors among them, the first with the last.
+        heading, _ = np.nonzero(ring_du)
+        forward = ring_du[ring_du != 0.0] > 0.0
+        if not len(forward):
+            continue
+        previous = np.empty_like(forward)
+        previous[1:] = forward[:-1]
+        ends = np.flatnonzero(np.diff(heading, append=-1))  # each heading's last edge
+        begins = np.concatenate(([0], ends[:-1] + 1))
+        previous[begins] = forward[ends]
+        turn_backs += np.bincount(heading[forward != previous], minlength=len(headings_deg))
     return HeadingScores(
         working_m=working,
         pieces=pieces,

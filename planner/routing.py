@@ -10,6 +10,7 @@ other is kept for later moves; :meth:`FieldRouter.distances` builds the whole gr
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 
@@ -36,6 +37,9 @@ SNAP_M = 5e-3
 _FIRST_CORNERS = 32
 #: Corners up to which pair states are kept in a dense matrix (4 MB), beyond in a dict.
 _DENSE_CORNERS = 2048
+#: A pair of corners is left out of a search only if every path through it is this much
+#: longer than one found (the bound's rounding is some 1e-13 m) [m].
+_REACH_SLACK_M = 1e-6
 #: Sine below which a corner's neighbour counts as on a line through the corner.
 _COLLINEAR = 1e-9
 
@@ -84,10 +88,15 @@ class FieldRouter:
         # Whether two tangent corners see each other, by pair key (lo * n + hi), as
         # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
         self._seen: dict[int, bool] = {}
-        # Up to _DENSE_CORNERS corners, both tests of every pair met so far in one matrix
-        # instead (-1 not yet, 0 no, 1 tangent and in sight): fields' moves meet the same
-        # pairs again and again.
+        # Both tests of every pair met so far in one matrix instead (-1 not yet, 0 no, 1
+        # tangent and in sight), over up to _DENSE_CORNERS corners numbered as queries meet
+        # them (_slot; -1 not met): fields' moves meet the same pairs again and again, and a
+        # jagged field's next move the pairs of the last. When more corners are met, the
+        # matrix starts afresh.
         self._states: npt.NDArray[np.int8] | None = None
+        self._slot = np.empty(0, dtype=np.int64)
+        self._met: list[IntArray] = []
+        self._slots_used = 0
         self._graph: csr_matrix | None = None
 
     def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
@@ -115,6 +124,19 @@ class FieldRouter:
         """
         line = shapely.linestrings(points[:, ::-1] if self._swap else points)
         return bool(shapely.contains_properly(self._test, line))
+
+    def inside_paths(self, paths: list[FloatArray]) -> npt.NDArray[np.bool_]:
+        """:meth:`inside_path` of each polyline of ``paths`` (each shape (k, 2), k ≥ 2).
+
+        One GEOS call for them all: a jagged field's hundreds of moves between cells each try
+        the vehicle's own turn first.
+        """
+        if not paths:
+            return np.zeros(0, dtype=bool)
+        points = np.concatenate(paths)
+        owner = np.repeat(np.arange(len(paths)), [len(p) for p in paths])
+        lines = shapely.linestrings(points[:, ::-1] if self._swap else points, indices=owner)
+        return np.asarray(shapely.contains_properly(self._test, lines))
 
     def _snap(self, point: FloatArray) -> FloatArray:
         """Return ``point``, or its nearest point of the field if it lies just outside."""
@@ -146,6 +168,22 @@ class FieldRouter:
         b = np.asarray(end_xy, dtype=float)
         if self.inside(a[None], b[None])[0]:
             return np.stack([a, b])
+        return self._search(a, b)
+
+    def paths(self, starts: FloatArray, ends: FloatArray) -> list[FloatArray]:
+        """:meth:`path` from each ``starts[k]`` to ``ends[k]`` (shapes (k, 2)), local [m].
+
+        The straight moves are found in one test of them all; only the others are searched.
+        """
+        starts, ends = np.asarray(starts, dtype=float), np.asarray(ends, dtype=float)
+        straight = self.inside(starts, ends).tolist()
+        return [
+            np.stack([a, b]) if seen else self._search(a, b)
+            for a, b, seen in zip(starts, ends, straight, strict=True)
+        ]
+
+    def _search(self, a: FloatArray, b: FloatArray) -> FloatArray:
+        """:meth:`path` of a move whose straight segment leaves the field."""
         snapped_a, snapped_b = self._snap(a), self._snap(b)
         if snapped_a is not a or snapped_b is not b:
             inner = self.path(
@@ -165,6 +203,7 @@ class FieldRouter:
         count = min(n, _FIRST_CORNERS)
         see_a = np.empty(0, dtype=bool)
         see_b = np.empty(0, dtype=bool)
+        reach = math.inf
         while True:
             if count > len(order):
                 order, ranked, complete = self._by_bound(a, b, count)
@@ -174,9 +213,10 @@ class FieldRouter:
             # The subsets grow by their far end: see the new corners only.
             see_a = np.concatenate([see_a, self._visible_from(a, subset[len(see_a) :])])
             see_b = np.concatenate([see_b, self._visible_from(b, subset[len(see_b) :])])
-            found = self._subset_path(a, b, subset, see_a, see_b)
+            found = self._subset_path(a, b, subset, see_a, see_b, reach=reach)
             if found is not None:
                 need = found[1] + 1e-9
+                reach = need
                 if need >= complete:
                     order, ranked, complete = self._by_bound(a, b, count, reach=need)
                 enough = int(np.searchsorted(ranked, need, side="right"))
@@ -226,16 +266,38 @@ class FieldRouter:
         subset: IntArray,
         see_a: npt.NDArray[np.bool_],
         see_b: npt.NDArray[np.bool_],
+        *,
+        reach: float = math.inf,
     ) -> tuple[FloatArray, float] | None:
         """Shortest path from ``a`` to ``b`` through the corners ``subset`` only.
 
-        ``see_a[k]``, ``see_b[k]``: whether ``a``, ``b`` see corner ``subset[k]``.
+        ``see_a[k]``, ``see_b[k]``: whether ``a``, ``b`` see corner ``subset[k]``. A path no
+        longer than ``reach`` is known: a pair of corners that no path through both could
+        keep within it (``|a − i| + |i − j| + |j − b|`` beyond it, either way round) is no
+        edge of the shortest path, nor ties with one, so it is not tested at all: the last,
+        largest subset of a search tests a fraction of its pairs.
         """
         s = len(subset)
-        i, j = np.triu_indices(s, k=1)
-        keep = self._seen_pairs(subset[i], subset[j])
+        i, j = _pairs(s)
+        pair_m = None
+        if reach < math.inf:
+            corner_xy = self.nodes[subset]
+            from_a = np.hypot(*(corner_xy - a).T)
+            to_b = np.hypot(*(corner_xy - b).T)
+            pair_m = np.hypot(*(corner_xy[i] - corner_xy[j]).T)
+            bound = np.minimum(from_a[i] + to_b[j], from_a[j] + to_b[i]) + pair_m
+            near = np.flatnonzero(bound <= reach + _REACH_SLACK_M)
+            i, j, pair_m = i[near], j[near], pair_m[near]
+        slots = self._slots(subset)
+        if slots is None:
+            keep = self._seen_pairs(subset[i], subset[j])
+        else:
+            keep = self._seen_slot_pairs(subset[i], subset[j], slots[i], slots[j])
         i, j = i[keep], j[keep]
-        length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
+        if pair_m is None:
+            length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
+        else:
+            length = pair_m[keep]
         # Nodes 0 … s-1 the corners, s the start, s+1 the end.
         ia, ib = np.nonzero(see_a)[0], np.nonzero(see_b)[0]
         rows = np.concatenate([i, np.full(len(ia), s), ib])
@@ -254,20 +316,54 @@ class FieldRouter:
         corners = subset[np.asarray(chain[1:-1], dtype=np.int64)]
         return np.vstack([a, self.nodes[corners], b]), distance
 
+    def _slots(self, corners: IntArray) -> IntArray | None:
+        """Slots of ``corners`` (distinct) in the pair matrix, new ones given slots.
+
+        None if they are more than the matrix holds (that query is cached by pair key).
+        """
+        size = min(len(self.nodes), _DENSE_CORNERS)
+        if len(corners) > size:
+            return None
+        if self._states is None:
+            self._states = np.full((size, size), -1, dtype=np.int8)
+            self._slot = np.full(len(self.nodes), -1, dtype=np.int64)
+        slots = self._slot[corners]
+        new = corners[slots < 0]
+        if len(new) == 0:
+            return slots
+        if self._slots_used + len(new) > size:
+            # Full: start afresh (pairs met again are tested again, with the same answers).
+            for met in self._met:
+                self._slot[met] = -1
+            self._met.clear()
+            self._states.fill(-1)
+            self._slots_used = 0
+            new = corners
+        self._slot[new] = self._slots_used + np.arange(len(new))
+        self._slots_used += len(new)
+        self._met.append(new)
+        return self._slot[corners]
+
+    def _seen_slot_pairs(
+        self, i: IntArray, j: IntArray, slot_i: IntArray, slot_j: IntArray
+    ) -> npt.NDArray[np.bool_]:
+        """:meth:`_seen_pairs` by the pair matrix: corners ``i, j`` in ``slot_i, slot_j``."""
+        assert self._states is not None
+        known = self._states[slot_i, slot_j]
+        new = np.nonzero(known < 0)[0]
+        if len(new):
+            i, j = i[new], j[new]
+            state = self._tangent_pairs(i, j).astype(np.int8)
+            tangent = np.nonzero(state)[0]
+            if len(tangent):
+                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
+            self._states[slot_i[new], slot_j[new]] = state
+            self._states[slot_j[new], slot_i[new]] = state
+            known[new] = state
+        return np.asarray(known == 1)
+
     def _seen_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
         """Whether corners ``i[k]`` and ``j[k]`` are tangent and see each other (cached)."""
-        if self._states is not None:
-            known = self._states[i, j]
-            new = np.nonzero(known < 0)[0]
-            if len(new):
-                i, j = i[new], j[new]
-                state = self._tangent_pairs(i, j).astype(np.int8)
-                tangent = np.nonzero(state)[0]
-                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
-                self._states[i, j] = state
-                self._states[j, i] = state
-                known[new] = state
-            return np.asarray(known == 1)
         ok = self._tangent_pairs(i, j)
         where = np.nonzero(ok)[0]
         if len(where) == 0:
@@ -325,8 +421,6 @@ class FieldRouter:
         to_prev /= np.hypot(*to_prev.T)[:, None]
         to_next /= np.hypot(*to_next.T)[:, None]
         self._xy = np.ascontiguousarray(self.nodes.T)
-        if len(self.nodes) <= _DENSE_CORNERS:
-            self._states = np.full((len(self.nodes), len(self.nodes)), -1, dtype=np.int8)
         self._around = np.ascontiguousarray(np.hstack([to_prev, to_next]).T)
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
@@ -415,6 +509,15 @@ class FieldRouter:
         length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
         self._graph = csr_matrix((length, (i, j)), shape=(n, n))
         return self._graph
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(count: int) -> tuple[IntArray, IntArray]:
+    """``np.triu_indices(count, k=1)``, read-only and shared: queries ask for the same sizes."""
+    i, j = np.triu_indices(count, k=1)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
 
 
 def _swap_xy(xy: FloatArray) -> FloatArray:
