@@ -46,8 +46,10 @@ WORKDIR /app
 USER tillpath
 # The planner's numba kernels, compiled once here (seconds) rather than by every new
 # container's first plan; site-packages is not writable for this user, so numba needs a
-# directory it can write (and find again).
-ENV NUMBA_CACHE_DIR=/app/numba-cache
+# directory it can write (and find again). Numba keys its cache on the CPU it compiled for:
+# a generic target, so that the image's cache serves whatever machine runs it (no fastmath,
+# so the same arithmetic; the code is a little slower than one built for the host).
+ENV NUMBA_CACHE_DIR=/app/numba-cache NUMBA_CPU_NAME=generic
 RUN python -c "from planner.kernels import warm_up; warm_up()"
 
 EXPOSE 8000

@@ -5,12 +5,14 @@ Run it with ``tillpath serve`` (uvicorn's factory mode: ``app.main:create_app``)
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 from starlette.middleware.gzip import GZipMiddleware
 
+from app import budget
 from app.errors import BodySizeLimitMiddleware, register_error_handlers
 from app.jobs import jobs_lifespan
 from app.routers import (
@@ -51,6 +53,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        if resolved.warm_up_planner:  # a spawned worker of `serve --workers N`
+            await asyncio.to_thread(budget.warm_up().join)
         async with jobs_lifespan(app, resolved):
             yield
 

@@ -60,6 +60,10 @@ class Settings(BaseSettings):
         (product.md §13). None: the server starts a local cluster of its own.
     dask_workers : int or None
         Worker processes of that local cluster (default: one per CPU core).
+    warm_up_planner : bool
+        Start the fork server and load the planner's kernels before the app answers
+        (:func:`app.budget.warm_up`). ``tillpath serve`` does it in its own process and sets
+        this for the processes of ``--workers N > 1``, which uvicorn spawns afresh.
     """
 
     model_config = SettingsConfigDict(env_prefix="TILLPATH_", extra="ignore")
@@ -81,6 +85,7 @@ class Settings(BaseSettings):
     secure_cookies: bool = False
     dask_scheduler: str | None = None
     dask_workers: int | None = Field(default=None, ge=1)
+    warm_up_planner: bool = False
 
 
 @lru_cache

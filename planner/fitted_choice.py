@@ -204,8 +204,16 @@ def choose_convex(
                 checked.append(fitted(heading, variant))
             except InvalidParameterError:
                 continue
-        near = _near_misses(choice, estimated_best, objective)
-        if near:
+        # The rule on the doubtful alternatives alone: one that covers more
+        # than the slack beyond the choice means the estimate does not hold here (below).
+        best_doubtful = max((c.covered_m2 for c in checked), default=0.0)
+        if best_doubtful > first.covered_m2 + slack_m2:
+            beaten = True
+        else:
+            near = _near_misses(choice, estimated_best, objective)
+            if not near:
+                lost_pp = max(best_doubtful - first.covered_m2, 0.0) / area * 100.0
+                return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
             # Shorter headings the estimate ranks just beyond the rule: fitted, and the rule
             # is held on what they really cover.
             fits = fitted_many([h for h, _ in near], [k for _, k in near])
@@ -220,24 +228,15 @@ def choose_convex(
                 more = [a for a in choice.alternatives if a[0] not in done]
                 fits = fitted_many([h for h, _ in more], [k for _, k in more]) if more else []
                 checked += [f for f in fits if not isinstance(f, InvalidParameterError)]
-        best_checked = max((c.covered_m2 for c in checked), default=0.0)
-        if first.covered_m2 >= best_checked - slack_m2:
-            if near:
-                best_m2 = max(best_checked, first.covered_m2)
-                eligible = [c for c in [first, *checked] if c.covered_m2 >= best_m2 - slack_m2]
-                picked = min(eligible, key=lambda c: _key(c, objective))
-                if picked is not first:
-                    lost_pp = max(best_m2 - picked.covered_m2, 0.0) / area * 100.0
-                    return FittedChoice(picked, lost_pp)
-            lost_pp = max(best_checked - first.covered_m2, 0.0) / area * 100.0
-            return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
-        if near:
-            # The fitted alternatives cover more than the rule allows beyond the choice: the
-            # estimate's bound was wrong here. The choice stays (refitting every heading on
-            # each such field costs a fifth more CPU on small plots), and says what it gave up.
-            lost_pp = (best_checked - first.covered_m2) / area * 100.0
-            return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
-        beaten = True
+            # The shortest of everything fitted that keeps the rule over everything fitted:
+            # never a heading a fitted one covers more than the slack beyond (R5).
+            best_m2 = max(c.covered_m2 for c in [first, *checked])
+            eligible = [c for c in [first, *checked] if c.covered_m2 >= best_m2 - slack_m2]
+            picked = min(eligible, key=lambda c: _key(c, objective))
+            lost_pp = max(best_m2 - picked.covered_m2, 0.0) / area * 100.0
+            if picked is first:
+                lost_pp = max(choice.coverage_given_up_pp, lost_pp)
+            return FittedChoice(picked, lost_pp)
     # Below the estimate's rule, beaten by a fitted alternative, or no turn fits the choice:
     # the estimate does not hold on this field. Fitted coverage moves by most of a
     # percentage point within half a degree where a line meets a corner, so a few

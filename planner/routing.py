@@ -511,9 +511,22 @@ class FieldRouter:
         return self._graph
 
 
-@functools.lru_cache(maxsize=64)
+#: Subsets up to this many corners share their pair indices (at most 64 sizes, ~1 MB each);
+#: larger ones are rare and would pin tens of MB per size in a long-lived worker.
+_SHARED_PAIRS_MAX = 512
+
+
 def _pairs(count: int) -> tuple[IntArray, IntArray]:
-    """``np.triu_indices(count, k=1)``, read-only and shared: queries ask for the same sizes."""
+    """``np.triu_indices(count, k=1)``, shared for the small sizes queries ask for again."""
+    if count <= _SHARED_PAIRS_MAX:
+        return _shared_pairs(count)
+    i, j = np.triu_indices(count, k=1)
+    return i, j
+
+
+@functools.lru_cache(maxsize=64)
+def _shared_pairs(count: int) -> tuple[IntArray, IntArray]:
+    """``np.triu_indices(count, k=1)``, read-only: shared between queries."""
     i, j = np.triu_indices(count, k=1)
     i.flags.writeable = False
     j.flags.writeable = False

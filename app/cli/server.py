@@ -141,6 +141,10 @@ def register(cli: typer.Typer) -> None:
         warming.join()  # so that no request waits for it
         cluster = None
         settings = get_settings()
+        if workers > 1:
+            # uvicorn spawns each worker afresh: each warms its own fork server and kernels
+            # (from the cache this process just filled) before it answers.
+            os.environ["TILLPATH_WARM_UP_PLANNER"] = "true"
         if workers > 1 and settings.dask_scheduler is None:
             # Several web processes share one local cluster, started (and stopped) here.
             cluster = start_local_cluster(settings.dask_workers or os.cpu_count() or 1)

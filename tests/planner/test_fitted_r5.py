@@ -57,6 +57,7 @@ def test_searched_heading_keeps_the_rule_over_fixed_candidate_headings(
 BRUTE_FORCE_FIELDS = (9, 20)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("field_k", BRUTE_FORCE_FIELDS)
 def test_searched_plan_within_five_hundredths_of_a_percent_of_a_tenth_degree_brute_force(
     field_k: int,
