@@ -228,15 +228,19 @@ def choose_convex(
                 more = [a for a in choice.alternatives if a[0] not in done]
                 fits = fitted_many([h for h, _ in more], [k for _, k in more]) if more else []
                 checked += [f for f in fits if not isinstance(f, InvalidParameterError)]
-            # The shortest of everything fitted that keeps the rule over everything fitted:
-            # never a heading a fitted one covers more than the slack beyond (R5).
             best_m2 = max(c.covered_m2 for c in [first, *checked])
-            eligible = [c for c in [first, *checked] if c.covered_m2 >= best_m2 - slack_m2]
-            picked = min(eligible, key=lambda c: _key(c, objective))
-            lost_pp = max(best_m2 - picked.covered_m2, 0.0) / area * 100.0
-            if picked is first:
-                lost_pp = max(choice.coverage_given_up_pp, lost_pp)
-            return FittedChoice(picked, lost_pp)
+            if best_m2 > first.covered_m2 + slack_m2:
+                # A fitted heading covers more than the rule allows beyond the choice: the
+                # estimate does not hold here either (below), never a choice that breaks R5.
+                beaten = True
+            else:
+                # The shortest of everything fitted that keeps the rule over all of it.
+                eligible = [c for c in [first, *checked] if c.covered_m2 >= best_m2 - slack_m2]
+                picked = min(eligible, key=lambda c: _key(c, objective))
+                lost_pp = max(best_m2 - picked.covered_m2, 0.0) / area * 100.0
+                if picked is first:
+                    lost_pp = max(choice.coverage_given_up_pp, lost_pp)
+                return FittedChoice(picked, lost_pp)
     # Below the estimate's rule, beaten by a fitted alternative, or no turn fits the choice:
     # the estimate does not hold on this field. Fitted coverage moves by most of a
     # percentage point within half a degree where a line meets a corner, so a few
