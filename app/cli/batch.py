@@ -166,12 +166,6 @@ def run_batch(
     output.unlink(missing_ok=True)
     writer = GeoPackageWriter(output)
     started = time.perf_counter()
-    if not scheduler:
-        # Here first: with a cold cache one process compiles the kernels (~9 s of CPU) and
-        # the local workers load them from the disk cache, instead of each compiling them.
-        from planner import kernels
-
-        kernels.warm_up()
     cluster = None if scheduler else start_local_cluster(workers)
     client = Client(scheduler or cluster, set_as_default=False)
     try:
