@@ -35,9 +35,9 @@ def _kernel_cache() -> None:
     inside a test would count against its timeouts (a subprocess, a server, a page, a
     Hypothesis deadline). Compiled here, they load from the cache everywhere after (0.35 s).
     """
-    from planner import kernels
+    from app.testing import warm_kernel_cache
 
-    kernels.warm_up()
+    warm_kernel_cache()
 
 
 @pytest.fixture(scope="session")
