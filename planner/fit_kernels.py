@@ -21,7 +21,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit
+from planner.kernels import _jit, _left, _mn, _mx, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -168,6 +168,207 @@ def _sample(
     return xy, offsets
 
 
+@_jit
+def _translate(
+    xy: FloatArray,
+    offsets: IntArray,
+    x0: FloatArray,
+    y0: FloatArray,
+    x1: FloatArray,
+    y1: FloatArray,
+) -> None:
+    """``planner.turns._translate_numpy``'s moves, in place."""
+    for k in range(len(offsets) - 1):
+        first, last = offsets[k], offsets[k + 1] - 1
+        for i in range(first, last + 1):
+            xy[i, 0] += x0[k]
+            xy[i, 1] += y0[k]
+        xy[first, 0], xy[first, 1] = x0[k], y0[k]
+        xy[last, 0], xy[last, 1] = x1[k], y1[k]
+
+
+def translate_turns(
+    xy: FloatArray,
+    offsets: IntArray,
+    x0: FloatArray,
+    y0: FloatArray,
+    x1: FloatArray,
+    y1: FloatArray,
+) -> None:
+    """Move turn ``k``'s points (``xy``, in place) by ``(x0, y0)[k]``; its ends exactly on them."""
+    f = _floats
+    _translate(xy, np.ascontiguousarray(offsets, dtype=np.int64), f(x0), f(y0), f(x1), f(y1))
+
+
+@_jit
+def _interp(x: float, xp: FloatArray, fp: FloatArray) -> float:
+    """``np.interp(x, xp, fp)`` of one value, ``xp`` non-decreasing (numpy's algorithm)."""
+    n = len(xp)
+    if n == 1:
+        return float(fp[0])
+    if x != x:
+        return x
+    if x < xp[0]:
+        return float(fp[0])
+    if x > xp[n - 1]:
+        return float(fp[n - 1])
+    j = _right(xp, 0, n, x) - 1  # the last xp[j] <= x
+    if j == n - 1 or xp[j] == x:
+        return float(fp[j])
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    r = slope * (x - xp[j]) + fp[j]
+    if r != r:  # NaN one way: try the other
+        r = slope * (x - xp[j + 1]) + fp[j + 1]
+        if r != r and fp[j] == fp[j + 1]:
+            r = float(fp[j])
+    return float(r)
+
+
+@_jit
+def _chain_crossings(
+    xy: FloatArray,
+    pv: FloatArray,
+    offsets: IntArray,
+    top: npt.NDArray[np.bool_],
+    cu: FloatArray,
+    cv: FloatArray,
+    shift: float,
+    delta: FloatArray,
+    fits: npt.NDArray[np.bool_],
+    tolerance: float,
+    reduce_max: bool,
+) -> None:
+    """``planner.line_ends._chain_vertices_under`` folded into ``delta`` (max) or ``fits``.
+
+    ``cu``, ``cv``: both chains, the upper's vertices first, the lower's shifted by ``shift``;
+    a turn at the top (``top``) meets the upper chain's vertices, others the lower's.
+    """
+    for k in range(len(offsets) - 1):
+        at_top = top[k]
+        offset = 0.0 if at_top else shift
+        for i in range(offsets[k], offsets[k + 1] - 1):
+            ua, ub, va, vb = xy[i, 0], xy[i + 1, 0], pv[i], pv[i + 1]
+            lo_u = _mn(ua, ub) + offset
+            hi_u = _mx(ua, ub) + offset
+            first = _right(cu, 0, len(cu), lo_u)
+            stop = _left(cu, 0, len(cu), hi_u)
+            a_u, b_u = ua + offset, ub + offset
+            for vertex in range(first, stop):
+                t = (cu[vertex] - a_u) / (b_u - a_u if b_u != a_u else 1.0)
+                curve_v = va + t * (vb - va)
+                gap = curve_v - cv[vertex] if at_top else cv[vertex] - curve_v
+                if reduce_max:
+                    delta[k] = _mx(delta[k], gap)
+                else:
+                    fits[k] = fits[k] and gap <= tolerance
+
+
+@_jit
+def _fit_turns(
+    xy: FloatArray,
+    offsets: IntArray,
+    top: npt.NDArray[np.bool_],
+    lo_u: FloatArray,
+    lo_v: FloatArray,
+    hi_u: FloatArray,
+    hi_v: FloatArray,
+    tolerance: float,
+    shift_out: FloatArray,
+    fits_out: npt.NDArray[np.bool_],
+    xy_out: FloatArray,
+) -> bool:
+    """``planner.line_ends._fitted_numpy``'s shifts, fits and moved points; False: not done.
+
+    Chains whose ``u`` steps back (which :func:`planner.coverage.convex_chains` never makes)
+    are left to the numpy code: ``np.interp`` and ``searchsorted`` answer differently there.
+    """
+    for chain in (lo_u, hi_u):
+        for i in range(1, len(chain)):
+            if not chain[i - 1] <= chain[i]:
+                return False
+    n_turns, n_points = len(offsets) - 1, len(xy)
+    # Chains.u_min and u_max: Python's min and max of the two (the first on ties).
+    u_min = hi_u[0] if hi_u[0] < lo_u[0] else lo_u[0]
+    u_max = hi_u[-1] if hi_u[-1] > lo_u[-1] else lo_u[-1]
+    hi = np.empty(n_points)
+    lo = np.empty(n_points)
+    pv = np.empty(n_points)
+    delta = np.zeros(n_turns)
+    biggest = 0.0
+    for k in range(n_turns):
+        for i in range(offsets[k], offsets[k + 1]):
+            pu = xy[i, 0]
+            pv[i] = xy[i, 1]
+            hi[i] = _interp(pu, hi_u, hi_v)
+            lo[i] = _interp(pu, lo_u, lo_v)
+            if pu < u_min - tolerance or pu > u_max + tolerance:
+                need = math.inf
+            else:
+                need = pv[i] - hi[i] if top[k] else lo[i] - pv[i]
+            delta[k] = _mx(delta[k], need)
+            biggest = _mx(biggest, abs(pu))
+    # Both chains in one sorted array: the lower chain's vertices shifted past every curve.
+    shift = 4.0 * (biggest + abs(u_max) + abs(u_min))
+    shift += 1.0
+    n_hi = len(hi_u)
+    cu = np.empty(n_hi + len(lo_u))
+    cv = np.empty(n_hi + len(lo_u))
+    cu[:n_hi], cv[:n_hi] = hi_u, hi_v
+    for i in range(len(lo_u)):
+        cu[n_hi + i], cv[n_hi + i] = lo_u[i] + shift, lo_v[i]
+    _chain_crossings(xy, pv, offsets, top, cu, cv, shift, delta, fits_out, tolerance, True)
+    moved_v = np.empty(n_points)
+    for k in range(n_turns):
+        reachable = math.isfinite(delta[k])
+        d = delta[k] if reachable else 0.0
+        shift_out[k] = -d if top[k] else d
+        fits_out[k] = reachable
+        for i in range(offsets[k], offsets[k + 1]):
+            moved = pv[i] + shift_out[k]
+            moved_v[i] = moved
+            xy_out[i, 0], xy_out[i, 1] = xy[i, 0], moved
+            clash = (lo[i] - moved if top[k] else moved - hi[i]) > tolerance
+            fits_out[k] = fits_out[k] and not clash
+    below = np.empty(n_turns, dtype=np.bool_)
+    for k in range(n_turns):
+        below[k] = not top[k]
+    _chain_crossings(xy, moved_v, offsets, below, cu, cv, shift, delta, fits_out, tolerance, False)
+    return True
+
+
+def fit_turns(
+    xy: FloatArray,
+    offsets: IntArray,
+    top: npt.NDArray[np.bool_],
+    lo_u: FloatArray,
+    lo_v: FloatArray,
+    hi_u: FloatArray,
+    hi_v: FloatArray,
+    tolerance_m: float,
+) -> tuple[FloatArray, npt.NDArray[np.bool_], FloatArray] | None:
+    """Each turn's shift along ``v``, whether it fits, and its points moved by the shift.
+
+    None where the numpy code must decide (chains out of order; see ``_fit_turns``).
+    """
+    n = len(offsets) - 1
+    shift, fits, moved = np.empty(n), np.empty(n, dtype=np.bool_), np.empty((len(xy), 2))
+    f = _floats
+    done = _fit_turns(
+        f(xy),
+        np.ascontiguousarray(offsets, dtype=np.int64),
+        np.ascontiguousarray(top, dtype=np.bool_),
+        f(lo_u),
+        f(lo_v),
+        f(hi_u),
+        f(hi_v),
+        float(tolerance_m),
+        shift,
+        fits,
+        moved,
+    )
+    return (shift, fits, moved) if done else None
+
+
 def _floats(values: FloatArray) -> FloatArray:
     return np.ascontiguousarray(values, dtype=np.float64)
 
@@ -237,4 +438,5 @@ def warm_up() -> None:
         one, one, one + math.pi / 2.0, one + 1.0, one, one - math.pi / 2.0, 0.5, np.arange(6)
     )
     signs = np.array([[1, 0, 1]], dtype=np.int64)
-    sample_turns(one, one, one, one + 1.0, one, signs, params * 0.5, 0.5, 0.1, 0.5)
+    xy, offsets = sample_turns(one, one, one, one + 1.0, one, signs, params * 0.5, 0.5, 0.1, 0.5)
+    translate_turns(xy, offsets, one, one, one + 1.0, one)

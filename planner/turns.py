@@ -501,6 +501,11 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     once, from the origin, and translated to its turns.
     """
     n = len(ends)
+    if n < _SHAPES_FROM:  # every turn its own shape
+        zero = np.zeros(n)
+        dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
+        shapes = _vehicle_turns(TurnEnds(zero, zero, ends.yaw0, dx, dy, ends.yaw1), vehicle, step_m)
+        return _translate(shapes, None, ends)
     relative = np.stack([ends.x1 - ends.x0, ends.y1 - ends.y0, ends.yaw0, ends.yaw1])
     # Every shape is planned from the origin, then moved onto its ends, and turns share a
     # shape only if their relative ends are the same to the last bit: so a turn's shape
@@ -509,16 +514,13 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     # either way with the last bit: shared to 1e-9, a field fitted at many headings at once
     # pulled some line ends back 0.2 m further than fitted alone. Rounded to 1e-9 instead, a
     # straight move bent into a 37 m Dubins loop.)
-    shape_of: IntArray | None = None  # every turn its own shape
-    first = np.arange(n)
-    if n >= _SHAPES_FROM:
-        # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
-        order = np.lexsort(relative[::-1])
-        fresh = np.ones(n, dtype=bool)
-        fresh[1:] = (np.diff(relative[:, order], axis=1) != 0.0).any(axis=0)
-        first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
-        shape_of = np.empty(n, dtype=np.int64)
-        shape_of[order] = np.cumsum(fresh) - 1
+    # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
+    order = np.lexsort(relative[::-1])
+    fresh = np.ones(n, dtype=bool)
+    fresh[1:] = (np.diff(relative[:, order], axis=1) != 0.0).any(axis=0)
+    first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
+    shape_of = np.empty(n, dtype=np.int64)
+    shape_of[order] = np.cumsum(fresh) - 1
     dx, dy, yaw0, yaw1 = relative[:, first]
     zero = np.zeros(len(first))
     shapes = _vehicle_turns(TurnEnds(zero, zero, yaw0, dx, dy, yaw1), vehicle, step_m)
@@ -531,12 +533,22 @@ def _translate(shapes: TurnCurves, shape_of: IntArray | None, ends: TurnEnds) ->
     ``shape_of`` None: turn ``k`` is shape ``k``, and ``shapes`` (the caller's own) is moved
     in place.
     """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    curves = shapes if shape_of is None else take_turns(shapes, shape_of)
+    # Each curve moved by its start, and starting and ending exactly on its own line ends
+    # (compiled: _translate_numpy is the reference).
+    fit_kernels.translate_turns(curves.xy, curves.offsets, ends.x0, ends.y0, ends.x1, ends.y1)
+    return curves
+
+
+def _translate_numpy(shapes: TurnCurves, shape_of: IntArray | None, ends: TurnEnds) -> TurnCurves:
+    """:func:`_translate` in numpy: the compiled kernel's reference."""
     curves = shapes if shape_of is None else take_turns(shapes, shape_of)
     owner = np.arange(len(curves)).repeat(curves.offsets[1:] - curves.offsets[:-1])
     xy = curves.xy
     xy[:, 0] += ends.x0[owner]
     xy[:, 1] += ends.y0[owner]
-    # Each curve starts and ends exactly on its own line ends.
     xy[curves.offsets[:-1], 0], xy[curves.offsets[:-1], 1] = ends.x0, ends.y0
     xy[curves.offsets[1:] - 1, 0], xy[curves.offsets[1:] - 1, 1] = ends.x1, ends.y1
     return curves

@@ -7,11 +7,16 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from shapely import MultiPoint
 
-from planner import fit_kernels, turns
+from planner import convex_fits, fit_kernels, line_ends, turns
+from planner.coverage import Chains
+from planner.errors import InvalidParameterError
 from planner.turns import BULB_WORDS, DUBINS_WORDS, TurnCurves, TurnEnds
+from planner.vehicles import resolve_vehicle
 from tests.conftest import PAPER_FIELD
 
 
@@ -32,6 +37,16 @@ def same_curves(a: TurnCurves, b: TurnCurves) -> bool:
     )
 
 
+def copy_curves(curves: TurnCurves) -> TurnCurves:
+    return TurnCurves(
+        curves.xy.copy(),
+        curves.offsets.copy(),
+        curves.length_m.copy(),
+        curves.turn_rad.copy(),
+        curves.radius_m,
+    )
+
+
 def check_ends(ends: TurnEnds, radius_m: float) -> None:
     """Both words and samples equal the numpy code's, for every word set and both steps."""
     for words in (tuple(DUBINS_WORDS), BULB_WORDS, ("LSL", "RSR")):
@@ -48,6 +63,16 @@ def check_ends(ends: TurnEnds, radius_m: float) -> None:
             assert same_curves(
                 turns._sample_numpy(ends, signs, lengths, radius_m, step),
                 turns._sample(ends, signs, lengths, radius_m, step),
+            )
+        # Moved onto other ends: each turn its own shape, or shapes shared (in any order).
+        shapes = turns._sample(ends, signs, lengths, radius_m, turns.STEP_M)
+        moved = TurnEnds(*(v + 3.7 for v in (ends.x0, ends.y0, ends.yaw0, ends.x1, ends.y1)),
+                         ends.yaw1)  # fmt: skip
+        n = len(ends)
+        for shape_of in (None, np.arange(n)[::-1].copy()):
+            assert same_curves(
+                turns._translate_numpy(copy_curves(shapes), shape_of, moved),
+                turns._translate(copy_curves(shapes), shape_of, moved),
             )
         # Backwards segments (Reeds–Shepp's negative lengths) and zero ones.
         backwards = lengths * np.where(np.arange(lengths.size) % 3 == 1, -1.0, 1.0).reshape(
@@ -121,8 +146,84 @@ def test_plans_turns_equal_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
     fast = plans()
     monkeypatch.setattr(turns, "dubins_words", turns._dubins_words_numpy)
     monkeypatch.setattr(turns, "_sample", turns._sample_numpy)
+    monkeypatch.setattr(turns, "_translate", turns._translate_numpy)
+    monkeypatch.setattr(fit_kernels, "fit_turns", lambda *args: None)  # numpy decides
     assert plans() == fast
 
 
 def test_warm_up_compiles() -> None:
     fit_kernels.warm_up()
+
+
+def fitted_both(
+    curves: TurnCurves, top: np.ndarray, machine: Chains
+) -> tuple[tuple[TurnCurves, np.ndarray, np.ndarray], tuple[TurnCurves, np.ndarray, np.ndarray]]:
+    slow = line_ends._fitted_numpy(curves, top, machine)
+    fast = fit_kernels.fit_turns(
+        curves.xy, curves.offsets, top, machine.lo_u, machine.lo_v, machine.hi_u, machine.hi_v,
+        line_ends.FIT_TOLERANCE_M,
+    )  # fmt: skip
+    assert fast is not None
+    shift, fits, xy = fast
+    return slow, (
+        TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, 1.0),
+        shift,
+        fits,
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_turn_fitting_kernel_equals_numpy(seed: int) -> None:
+    # Convex fields at random headings, every vehicle, lines placed as the fitting does: the
+    # turns slid into the machine area by the kernel and by the numpy code.
+    rng = np.random.default_rng(400 + seed)
+    for trial in range(60):
+        scale = 10 ** rng.uniform(0.7, 2.3)
+        points = rng.normal(size=(int(rng.integers(3, 12)), 2)) * scale * rng.uniform(0.2, 1, 2)
+        if trial % 3 == 0:
+            points = np.round(points)
+        hull = shapely.convex_hull(MultiPoint(points))
+        if hull.geom_type != "Polygon" or hull.area < 50.0:
+            continue
+        field = shapely.orient_polygons(hull)
+        for preset in ("hand_tractor", "small_tractor", "rover"):
+            vehicle = resolve_vehicle(preset)
+            try:
+                area = convex_fits.convex_machine_area(field, vehicle)
+            except InvalidParameterError:
+                continue
+            interval = float(rng.choice([1.0, 2.5, 4.0]))
+            heading = float(rng.uniform(0.0, 180.0))
+            placed = convex_fits._place(
+                field, area, heading, interval, vehicle, "boustrophedon", int(trial % 4)
+            )
+            if len(placed.u) < 2:
+                continue
+            (curves,) = line_ends.plan_line_turns(
+                [(placed.u, placed.v_start, placed.v_end, placed.index)], vehicle
+            )
+            assert curves is not None
+            top = placed.v_end[:-1] >= placed.v_start[:-1]
+            # Also every turn on the other side, and nudged off the chains.
+            for flip, nudge in ((False, 0.0), (True, 0.0), (False, 0.3)):
+                shifted = TurnCurves(
+                    curves.xy + np.array([0.0, nudge]), curves.offsets, curves.length_m,
+                    curves.turn_rad, curves.radius_m,
+                )  # fmt: skip
+                slow, fast = fitted_both(shifted, top ^ flip, placed.machine)
+                assert same_bits(slow[0].xy, fast[0].xy)
+                assert same_bits(slow[1], fast[1]) and same_bits(slow[2], fast[2])
+
+
+def test_turn_fitting_kernel_declines_chains_out_of_order() -> None:
+    chains = Chains(
+        np.array([0.0, 2.0, 1.0]), np.zeros(3), np.array([0.0, 1.0, 2.0]), np.ones(3) * 5.0
+    )
+    xy = np.array([[0.5, 4.0], [1.0, 5.5], [1.5, 4.0]])
+    offsets = np.array([0, 3])
+    top = np.array([True])
+    assert fit_kernels.fit_turns(xy, offsets, top, *vars_of(chains), 1e-6) is None
+
+
+def vars_of(chains: Chains) -> tuple[np.ndarray, ...]:
+    return chains.lo_u, chains.lo_v, chains.hi_u, chains.hi_v
