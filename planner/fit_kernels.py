@@ -1,17 +1,20 @@
-"""Compiled loops for the turns between lines, with the numpy code's arithmetic.
+"""Compiled loops for the turns between lines and the variants' lengths, with numpy's arithmetic.
 
-:func:`planner.turns.dubins_words` and :func:`planner.turns._sample` solve and sample every
-turn at once in numpy, but a small field has a few turns, so their cost is the ~150 numpy
-calls they make on arrays of three values (the paper field: 0.35 ms of a 4 ms plan). These
-are the same computations as one loop per turn, compiled by numba (:mod:`planner.kernels`'
-conventions: cached on disk, division by zero as numpy): every value comes from the same
-operations in the same order, so the turns, and so the plans, are the same to the last bit.
+A small field has a few lines and turns, so the numpy code that plans and fits them
+(:func:`planner.turns.dubins_words`, ``_sample`` and ``_translate``;
+:func:`planner.line_ends._fit_turns`) and sums the variants of every heading
+(:func:`planner.ordering.combine_variants`) costs its ~300 numpy calls on arrays of a few
+values (the paper field: about a fifth of a 4 ms plan). These are the same computations as one
+loop per turn or heading, compiled by numba (:mod:`planner.kernels`' conventions: cached on
+disk, division by zero as numpy): every value comes from the same operations in the same
+order, so the turns, and so the plans, are the same to the last bit. The numpy code stays
+the reference.
 
 Unlike :mod:`planner.kernels` these call ``sin``, ``cos``, ``atan2``, ``acos`` and
 ``hypot``: numba calls the C library's, as numpy does for float64 on x86-64 without
-AVX-512 (numpy dispatches some to its own SIMD code on AVX-512 machines, where the last bit
-could differ). ``tests/planner/test_fit_kernels.py`` compares the two bit for bit on the
-machine it runs on.
+AVX-512 (numpy 2.4 dispatches some to its own SIMD code on AVX-512 machines, where the last
+bit could differ). ``tests/planner/test_fit_kernels.py`` compares the two bit for bit on
+the machine it runs on.
 """
 
 from __future__ import annotations
@@ -369,6 +372,78 @@ def fit_turns(
     return (shift, fits, moved) if done else None
 
 
+@_jit
+def _combine(
+    headings: FloatArray,
+    counts: IntArray,
+    rows: FloatArray,
+    start: FloatArray,
+    finish: FloatArray,
+    turns: FloatArray,
+    transit: FloatArray,
+) -> None:
+    """``planner.ordering.combine_variants``' turns and transit, one heading at a time.
+
+    ``rows``: the aggregates top_even, top_odd, bottom_even, bottom_odd, u_first, lo_first,
+    hi_first, u_last, lo_last, hi_last; ``start``, ``finish``: ``(x, y)``, or empty if none.
+    """
+    for h in range(len(headings)):
+        top_even, top_odd, bottom_even, bottom_odd = rows[0, h], rows[1, h], rows[2, h], rows[3, h]
+        u_f, lo_f, hi_f = rows[4, h], rows[5, h], rows[6, h]
+        u_l, lo_l, hi_l = rows[7, h], rows[8, h], rows[9, h]
+        left_up = top_even + bottom_odd  # line 0 drives up, so it turns at the top
+        left_down = bottom_even + top_odd
+        n_odd = counts[h] % 2 == 1
+        turns[h, 0], turns[h, 1] = left_up, left_down
+        turns[h, 2] = left_down if n_odd else left_up
+        turns[h, 3] = left_up if n_odd else left_down
+        theta = headings[h] * (math.pi / 180.0)  # np.radians
+        cos_t, sin_t = math.cos(theta), math.sin(theta)
+        ends_up = (counts[h] - 1) % 2 == 0
+        # Variants in VARIANTS order: left_up, left_down, right_up, right_down.
+        entry_u = (u_f, u_f, u_l, u_l)
+        entry_v = (lo_f, hi_f, lo_l, hi_l)
+        exit_u = (u_l, u_l, u_f, u_f)
+        exit_v = (hi_l, lo_l, hi_f, lo_f) if ends_up else (lo_l, hi_l, lo_f, hi_f)
+        for j in range(4):
+            total = 0.0
+            if len(start):
+                pu = start[0] * cos_t - start[1] * sin_t
+                pv = start[0] * sin_t + start[1] * cos_t
+                total += math.hypot(entry_u[j] - pu, entry_v[j] - pv)
+            if len(finish):
+                pu = finish[0] * cos_t - finish[1] * sin_t
+                pv = finish[0] * sin_t + finish[1] * cos_t
+                total += math.hypot(exit_u[j] - pu, exit_v[j] - pv)
+            transit[h, j] = total
+
+
+def combine_variants(
+    headings_deg: FloatArray,
+    counts: IntArray,
+    rows: FloatArray,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> tuple[FloatArray, FloatArray]:
+    """Return the four variants' turns and transit per heading, shape (A, 4) each.
+
+    ``rows``: :func:`planner.kernels.length_aggregates`' rows 1 to 10 (see :func:`_combine`).
+    """
+    n = len(headings_deg)
+    turns, transit = np.empty((n, 4)), np.empty((n, 4))
+    none = np.zeros(0)
+    _combine(
+        _floats(headings_deg),
+        np.ascontiguousarray(counts, dtype=np.int64),
+        _floats(rows),
+        none if start_xy is None else np.array(start_xy, dtype=np.float64),
+        none if finish_xy is None else np.array(finish_xy, dtype=np.float64),
+        turns,
+        transit,
+    )
+    return turns, transit
+
+
 def _floats(values: FloatArray) -> FloatArray:
     return np.ascontiguousarray(values, dtype=np.float64)
 
@@ -432,7 +507,7 @@ def sample_turns(
 
 
 def warm_up() -> None:
-    """Compile the kernels, or load them from the disk cache, on one U-turn."""
+    """Compile the kernels, or load them from the disk cache, on one U-turn and one heading."""
     one = np.zeros(1)
     best, params = dubins_words(
         one, one, one + math.pi / 2.0, one + 1.0, one, one - math.pi / 2.0, 0.5, np.arange(6)
@@ -440,3 +515,7 @@ def warm_up() -> None:
     signs = np.array([[1, 0, 1]], dtype=np.int64)
     xy, offsets = sample_turns(one, one, one, one + 1.0, one, signs, params * 0.5, 0.5, 0.1, 0.5)
     translate_turns(xy, offsets, one, one, one + 1.0, one)
+    chain = np.array([0.0, 2.0])
+    fit_turns(xy, offsets, np.ones(1, dtype=np.bool_), chain, chain * 0.0, chain, chain + 3.0, 1e-6)
+    rows = np.zeros((10, 1))
+    combine_variants(one, np.ones(1, dtype=np.int64), rows, (0.0, 1.0), None)

@@ -12,12 +12,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely import MultiPoint
 
-from planner import convex_fits, fit_kernels, line_ends, turns
+from planner import convex_fits, fit_kernels, kernels, line_ends, turns
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
+from planner.lines import to_sweep
+from planner.ordering import HeadingAggregates, combine_variants
 from planner.turns import BULB_WORDS, DUBINS_WORDS, TurnCurves, TurnEnds
 from planner.vehicles import resolve_vehicle
 from tests.conftest import PAPER_FIELD
+from tests.planner.test_kernels import convex_rings, headings
 
 
 def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
@@ -227,3 +230,22 @@ def test_turn_fitting_kernel_declines_chains_out_of_order() -> None:
 
 def vars_of(chains: Chains) -> tuple[np.ndarray, ...]:
     return chains.lo_u, chains.lo_v, chains.hi_u, chains.hi_v
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_combine_variants_kernel_equals_numpy(seed: int) -> None:
+    rng = np.random.default_rng(500 + seed)
+    for ring in convex_rings(seed, 60):
+        d = float(rng.choice([0.5, 1.0, 4.0, 7.3]))
+        h = headings(rng)
+        u, v = to_sweep(ring[:, 0], ring[:, 1], h[:, None])
+        counts, rows = kernels.length_aggregates(u, v, d)
+        centre = ring.mean(axis=0)
+        start = (float(centre[0] + rng.normal() * 50), float(centre[1] + rng.normal() * 50))
+        finish = (float(ring[0, 0]), float(ring[0, 1]))
+        for start_xy, finish_xy in ((start, finish), (None, finish), (start, None), (None, None)):
+            slow = combine_variants(HeadingAggregates(h, counts, *rows), start_xy, finish_xy)
+            turns_m, transit_m = fit_kernels.combine_variants(
+                h, counts, rows[1:], start_xy, finish_xy
+            )
+            assert same_bits(slow.turns, turns_m) and same_bits(slow.transit, transit_m)
