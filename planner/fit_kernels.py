@@ -444,6 +444,46 @@ def combine_variants(
     return turns, transit
 
 
+@_jit
+def _driving(
+    x: FloatArray, y: FloatArray, speed: float, rate: float, arc_step: float
+) -> tuple[FloatArray, FloatArray]:
+    """``planner.turns._driving_time_numpy``'s time per moving step and corner changes [s, rad]."""
+    n = len(x)
+    step = np.empty(max(n - 1, 0))
+    heading = np.empty(max(n - 1, 0))
+    m = 0
+    for i in range(n - 1):
+        dx, dy = x[i + 1] - x[i], y[i + 1] - y[i]
+        length = math.hypot(dx, dy)
+        if length > 1e-9:
+            step[m] = length
+            heading[m] = math.atan2(dy, dx)
+            m += 1
+    share = np.zeros(m)
+    corner = np.empty(max(m - 1, 0))
+    for i in range(m - 1):
+        change = abs((heading[i + 1] - heading[i] + math.pi) % (2.0 * math.pi) - math.pi)
+        on_arc = step[i] <= arc_step and step[i + 1] <= arc_step
+        share[i] += (change if on_arc else 0.0) / 2.0
+        corner[i] = 0.0 if on_arc else change
+    for i in range(1, m):  # after every first half, as numpy adds them
+        change = abs((heading[i] - heading[i - 1] + math.pi) % (2.0 * math.pi) - math.pi)
+        on_arc = step[i - 1] <= arc_step and step[i] <= arc_step
+        share[i] += (change if on_arc else 0.0) / 2.0
+    per_step = np.empty(m)
+    for i in range(m):
+        per_step[i] = _mx(step[i] / speed, share[i] / rate)
+    return per_step, corner
+
+
+def driving_times(
+    x: FloatArray, y: FloatArray, speed_mps: float, rate_rps: float, arc_step_m: float
+) -> tuple[FloatArray, FloatArray]:
+    """Each moving step's time [s] and the heading change at each corner off an arc [rad]."""
+    return _driving(_floats(x), _floats(y), float(speed_mps), float(rate_rps), float(arc_step_m))
+
+
 def _floats(values: FloatArray) -> FloatArray:
     return np.ascontiguousarray(values, dtype=np.float64)
 
@@ -519,3 +559,4 @@ def warm_up() -> None:
     fit_turns(xy, offsets, np.ones(1, dtype=np.bool_), chain, chain * 0.0, chain, chain + 3.0, 1e-6)
     rows = np.zeros((10, 1))
     combine_variants(one, np.ones(1, dtype=np.int64), rows, (0.0, 1.0), None)
+    driving_times(xy[:, 0].copy(), xy[:, 1].copy(), 0.5, 0.8, 0.5)

@@ -451,6 +451,21 @@ def driving_time_s(
     ...                      speed_mps=0.56, turn_rate_dps=45.0), 2)   # two right angles
     46.86
     """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    # Compiled: the steps and corners as _driving_time_numpy finds them, summed here.
+    per_step, corner = fit_kernels.driving_times(
+        x, y, speed_mps, math.radians(turn_rate_dps), STEP_M + 1e-9
+    )
+    if len(per_step) == 0:
+        return 0.0
+    return float(per_step.sum()) + float(corner.sum()) / math.radians(turn_rate_dps)
+
+
+def _driving_time_numpy(
+    x: FloatArray, y: FloatArray, *, speed_mps: float, turn_rate_dps: float
+) -> float:
+    """:func:`driving_time_s` in numpy: the compiled kernel's reference."""
     dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]  # np.diff, without its wrapper's cost
     step = np.hypot(dx, dy)
     moving = step > 1e-9

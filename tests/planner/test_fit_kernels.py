@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely import MultiPoint
 
-from planner import convex_fits, fit_kernels, kernels, line_ends, turns
+from planner import convex_fits, fit_kernels, kernels, line_ends, pipeline, turns
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
 from planner.lines import to_sweep
@@ -151,6 +152,15 @@ def test_plans_turns_equal_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(turns, "_sample", turns._sample_numpy)
     monkeypatch.setattr(turns, "_translate", turns._translate_numpy)
     monkeypatch.setattr(fit_kernels, "fit_turns", lambda *args: None)  # numpy decides
+    monkeypatch.setattr(pipeline, "driving_time_s", turns._driving_time_numpy)
+
+    def combined(*args: Any) -> tuple[np.ndarray, np.ndarray]:
+        h, counts, rows, start_xy, finish_xy = args
+        aggregates = HeadingAggregates(h, counts, np.zeros(len(h)), *rows)
+        lengths = combine_variants(aggregates, start_xy, finish_xy)
+        return lengths.turns, lengths.transit
+
+    monkeypatch.setattr(fit_kernels, "combine_variants", combined)
     assert plans() == fast
 
 
@@ -249,3 +259,27 @@ def test_combine_variants_kernel_equals_numpy(seed: int) -> None:
                 h, counts, rows[1:], start_xy, finish_xy
             )
             assert same_bits(slow.turns, turns_m) and same_bits(slow.transit, transit_m)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(-1.0, 1.0), st.floats(-1.0, 1.0), st.sampled_from([0.0, 0.3, 1.0, 9.0])
+        ),
+        max_size=40,
+    ),
+    st.floats(0.1, 3.0),
+    st.floats(5.0, 180.0),
+)
+def test_driving_time_kernel_equals_numpy(
+    moves: list[tuple[float, float, float]], speed_mps: float, rate_dps: float
+) -> None:
+    # Polylines of sampled arcs (short steps), corners, long runs and repeated points.
+    steps = np.array([(dx * s, dy * s) for dx, dy, s in moves]).reshape(-1, 2)
+    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(steps, axis=0)]) + 100.0
+    fast = turns.driving_time_s(xy[:, 0], xy[:, 1], speed_mps=speed_mps, turn_rate_dps=rate_dps)
+    slow = turns._driving_time_numpy(
+        xy[:, 0], xy[:, 1], speed_mps=speed_mps, turn_rate_dps=rate_dps
+    )
+    assert same_bits(np.array([slow]), np.array([fast]))
