@@ -197,7 +197,7 @@ def plan_coverage(
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
         sweep = sweep_of(headings)
-        widths = np.ptp(sweep[0], axis=1)
+        widths = sweep[0].max(axis=1) - sweep[0].min(axis=1)  # np.ptp, without its wrapper
         loss = fitting_loss_m2(machine, interval, line_counts(widths, interval), widths) / field_m2
         return convex_coverage(ring_xy, headings, interval, sweep) - loss
 
