@@ -11,7 +11,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from shapely import MultiPoint
+from shapely import MultiPoint, Polygon
 
 from planner import convex_fits, fit_kernels, kernels, line_ends, pipeline, turns
 from planner.coverage import Chains
@@ -70,8 +70,9 @@ def check_ends(ends: TurnEnds, radius_m: float) -> None:
             )
         # Moved onto other ends: each turn its own shape, or shapes shared (in any order).
         shapes = turns._sample(ends, signs, lengths, radius_m, turns.STEP_M)
-        moved = TurnEnds(*(v + 3.7 for v in (ends.x0, ends.y0, ends.yaw0, ends.x1, ends.y1)),
-                         ends.yaw1)  # fmt: skip
+        moved = TurnEnds(
+            ends.x0 + 3.7, ends.y0 + 3.7, ends.yaw0, ends.x1 + 3.7, ends.y1 + 3.7, ends.yaw1
+        )
         n = len(ends)
         for shape_of in (None, np.arange(n)[::-1].copy()):
             assert same_curves(
@@ -196,7 +197,7 @@ def test_turn_fitting_kernel_equals_numpy(seed: int) -> None:
         if trial % 3 == 0:
             points = np.round(points)
         hull = shapely.convex_hull(MultiPoint(points))
-        if hull.geom_type != "Polygon" or hull.area < 50.0:
+        if not isinstance(hull, Polygon) or hull.area < 50.0:
             continue
         field = shapely.orient_polygons(hull)
         for preset in ("hand_tractor", "small_tractor", "rover"):
@@ -235,11 +236,8 @@ def test_turn_fitting_kernel_declines_chains_out_of_order() -> None:
     xy = np.array([[0.5, 4.0], [1.0, 5.5], [1.5, 4.0]])
     offsets = np.array([0, 3])
     top = np.array([True])
-    assert fit_kernels.fit_turns(xy, offsets, top, *vars_of(chains), 1e-6) is None
-
-
-def vars_of(chains: Chains) -> tuple[np.ndarray, ...]:
-    return chains.lo_u, chains.lo_v, chains.hi_u, chains.hi_v
+    c = chains
+    assert fit_kernels.fit_turns(xy, offsets, top, c.lo_u, c.lo_v, c.hi_u, c.hi_v, 1e-6) is None
 
 
 @pytest.mark.parametrize("seed", [0, 1])
