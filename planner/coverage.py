@@ -59,6 +59,16 @@ def convex_chains(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
     >>> c.lo_v.tolist(), c.hi_v.tolist()
     ([0.0, 0.0], [3.0, 3.0])
     """
+    from planner import coverage_kernels  # numba: imported by the first plan that needs it
+
+    arrays = coverage_kernels.chains_arrays(u_ring, v_ring)
+    if arrays is None:
+        return convex_chains_numpy(u_ring, v_ring)
+    return Chains(*arrays)
+
+
+def convex_chains_numpy(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
+    """:func:`convex_chains` in numpy: the reference for the compiled loop."""
     # An edge parallel to the lines at either end belongs to neither chain: the lower chain
     # runs bottom-left to bottom-right, the upper one top-left to top-right.
     at_min = np.flatnonzero(u_ring <= u_ring.min() + _TIE_M)
@@ -341,6 +351,42 @@ def _laid_out(
     cell : ndarray of int, shape (pieces,)
         The cell of each piece.
     """
+    from planner import coverage_kernels  # numba: imported by the first plan that needs it
+
+    d = float(interval_m)
+    offsets = np.asarray(offsets)
+    fast = None
+    if len(offsets) == len(chains) + 1 and offsets[0] == 0 and offsets[-1] == len(u):
+        fast = coverage_kernels.laid_out(
+            np.concatenate(
+                [a for c in chains for a in (c.lo_u, c.lo_v, c.hi_u, c.hi_v)], dtype=np.float64
+            ),
+            np.array([(len(c.lo_u), len(c.hi_u)) for c in chains], dtype=np.int64),
+            offsets,
+            u,
+            v_lo,
+            v_hi,
+            d,
+        )
+    if fast is None:
+        return _laid_out_numpy(chains, offsets, u, v_lo, v_hi, d)
+    odd, area, cell = fast
+    alone: dict[int, float] = {}
+    for c in np.flatnonzero(odd).tolist():
+        k = slice(int(offsets[c]), int(offsets[c + 1]))
+        alone[c] = covered_area(chains[c], u[k], v_lo[k], v_hi[k], d)
+    return alone, area, cell
+
+
+def _laid_out_numpy(
+    chains: list[Chains],
+    offsets: IntArray,
+    u: FloatArray,
+    v_lo: FloatArray,
+    v_hi: FloatArray,
+    interval_m: float,
+) -> tuple[dict[int, float], FloatArray, IntArray]:
+    """:func:`_laid_out` in numpy: the reference for the compiled loop."""
     d = float(interval_m)
     half = d / 2.0
     cells = len(chains)
