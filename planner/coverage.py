@@ -10,7 +10,7 @@ O(lines + vertices) in numpy, where intersecting 1,000 footprints with shapely c
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -32,12 +32,16 @@ class Chains:
         Lower chain, ``u`` non-decreasing.
     hi_u, hi_v : ndarray
         Upper chain, ``u`` non-decreasing.
+    packed : ndarray or None
+        ``[len(lo_u), len(hi_u), *lo_u, *lo_v, *hi_u, *hi_v]``, whose views the four arrays
+        are, for the compiled loops (:mod:`planner.coverage_kernels`); None if not made so.
     """
 
     lo_u: FloatArray
     lo_v: FloatArray
     hi_u: FloatArray
     hi_v: FloatArray
+    packed: FloatArray | None = field(default=None, repr=False, compare=False)
 
     @property
     def u_min(self) -> float:
@@ -61,10 +65,12 @@ def convex_chains(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
     """
     from planner import coverage_kernels  # numba: imported by the first plan that needs it
 
-    arrays = coverage_kernels.chains_arrays(u_ring, v_ring)
-    if arrays is None:
+    fast = coverage_kernels.packed_chains(u_ring, v_ring)
+    if fast is None:
         return convex_chains_numpy(u_ring, v_ring)
-    return Chains(*arrays)
+    n_lo, n_hi, p = fast
+    lo, hi = 2 + n_lo, 2 + 2 * n_lo
+    return Chains(p[2:lo], p[lo:hi], p[hi : hi + n_hi], p[hi + n_hi :], p)
 
 
 def convex_chains_numpy(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
@@ -358,10 +364,7 @@ def _laid_out(
     fast = None
     if len(offsets) == len(chains) + 1 and offsets[0] == 0 and offsets[-1] == len(u):
         fast = coverage_kernels.laid_out(
-            np.concatenate(
-                [a for c in chains for a in (c.lo_u, c.lo_v, c.hi_u, c.hi_v)], dtype=np.float64
-            ),
-            np.array([(len(c.lo_u), len(c.hi_u)) for c in chains], dtype=np.int64),
+            np.concatenate([_packed(c) if c.packed is None else c.packed for c in chains]),
             offsets,
             u,
             v_lo,
@@ -372,10 +375,16 @@ def _laid_out(
         return _laid_out_numpy(chains, offsets, u, v_lo, v_hi, d)
     odd, area, cell = fast
     alone: dict[int, float] = {}
-    for c in np.flatnonzero(odd).tolist():
+    for c in odd.tolist():
         k = slice(int(offsets[c]), int(offsets[c + 1]))
         alone[c] = covered_area(chains[c], u[k], v_lo[k], v_hi[k], d)
     return alone, area, cell
+
+
+def _packed(chains: Chains) -> FloatArray:
+    """``chains.packed`` for chains not made by :func:`convex_chains`' compiled loop."""
+    sizes = np.array([len(chains.lo_u), len(chains.hi_u)], dtype=np.float64)
+    return np.concatenate([sizes, chains.lo_u, chains.lo_v, chains.hi_u, chains.hi_v])
 
 
 def _laid_out_numpy(

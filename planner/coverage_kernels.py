@@ -26,25 +26,22 @@ from planner.kernels import _jit
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 _TIE_M = 1e-9  # planner.coverage._TIE_M
 
 
 @_jit
-def _chains(
-    u_ring: FloatArray, v_ring: FloatArray
-) -> tuple[bool, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """:func:`planner.coverage.convex_chains`' four arrays (ring of ≥ 1 vertex).
+def _chains(u_ring: FloatArray, v_ring: FloatArray) -> tuple[int, int, FloatArray]:
+    """:func:`planner.coverage.convex_chains` of a ring of ≥ 1 vertex, packed.
 
-    Returns False first (and empty arrays) if the ring holds a NaN.
+    Returns the chains' lengths and ``[n_lo, n_hi, lo_u, lo_v, hi_u, hi_v]`` (see
+    ``Chains.packed``); -1 and an empty array if the ring holds a NaN.
     """
     n = len(u_ring)
     u_lo_ring, u_hi_ring = u_ring[0], u_ring[0]
     for i in range(n):
         if u_ring[i] != u_ring[i] or v_ring[i] != v_ring[i]:
-            empty = np.empty(0)
-            return False, empty, empty, empty, empty
+            return -1, -1, np.empty(0)
         u_lo_ring = min(u_lo_ring, u_ring[i])
         u_hi_ring = max(u_hi_ring, u_ring[i])
     near_min = u_lo_ring + _TIE_M
@@ -65,8 +62,10 @@ def _chains(
                 hi_start = i
     n_lo = lo_end - lo_start + 1 if lo_end >= lo_start else n - lo_start + lo_end + 1
     n_hi = hi_end - hi_start + 1 if hi_end >= hi_start else n - hi_start + hi_end + 1
-    lo_u, lo_v = np.empty(n_lo), np.empty(n_lo)
-    hi_u, hi_v = np.empty(n_hi), np.empty(n_hi)
+    packed = np.empty(2 + 2 * (n_lo + n_hi))
+    packed[0], packed[1] = n_lo, n_hi
+    lo_u, lo_v = packed[2 : 2 + n_lo], packed[2 + n_lo : 2 + 2 * n_lo]
+    hi_u, hi_v = packed[2 + 2 * n_lo : 2 + 2 * n_lo + n_hi], packed[2 + 2 * n_lo + n_hi :]
     # np.maximum.accumulate (no NaN here): the running maximum, the later value on a tie.
     for j in range(n_lo):
         i = (lo_start + j) % n
@@ -77,7 +76,7 @@ def _chains(
         i = (hi_end - j) % n
         hi_v[j] = v_ring[i]
         hi_u[j] = u_ring[i] if j == 0 or u_ring[i] >= hi_u[j - 1] else hi_u[j - 1]
-    return True, lo_u, lo_v, hi_u, hi_v
+    return n_lo, n_hi, packed
 
 
 @_jit
@@ -176,38 +175,43 @@ def _merge(a: FloatArray, b: FloatArray) -> FloatArray:
 @_jit
 def _laid_out(
     packed: FloatArray,
-    sizes: IntArray,
     offsets: IntArray,
     u: FloatArray,
     v_lo: FloatArray,
     v_hi: FloatArray,
     d: float,
-) -> tuple[bool, BoolArray, FloatArray, IntArray]:
+) -> tuple[bool, IntArray, FloatArray, IntArray]:
     """``coverage._laid_out`` but the odd cells' own measure (see there).
 
-    ``packed`` holds each cell's ``lo_u, lo_v, hi_u, hi_v`` in turn, ``sizes`` each cell's
-    chain lengths (lower, upper). Returns whether the kernel could vouch for the result
-    (False: NaN, or keys out of order), the odd cells (measured on their own by the
-    caller), each piece's three areas and each piece's cell.
+    ``packed`` holds each cell's ``Chains.packed`` in turn. Returns whether the kernel could
+    vouch for the result (False: NaN, or keys out of order), the odd cells in order
+    (measured on their own by the caller), each piece's three areas and each piece's cell.
     """
-    cells = len(sizes)
+    cells = len(offsets) - 1
     n = len(u)
     half = d / 2.0
     no_area, no_cell = np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
     odd_cell = np.zeros(cells, dtype=np.bool_)
-    n_lo, n_hi = 0, 0
+    sizes = np.empty((cells, 2), dtype=np.int64)
+    n_lo, n_hi, p = 0, 0, 0
     for c in range(cells):
+        if p + 2 > len(packed):
+            return False, no_cell, no_area, no_cell
+        sizes[c, 0], sizes[c, 1] = int(packed[p]), int(packed[p + 1])
+        p += 2 + 2 * (sizes[c, 0] + sizes[c, 1])
         if sizes[c, 0] < 1 or sizes[c, 1] < 1 or offsets[c + 1] < offsets[c]:
-            return False, odd_cell, no_area, no_cell
+            return False, no_cell, no_area, no_cell
         n_lo += sizes[c, 0]
         n_hi += sizes[c, 1]
+    if p != len(packed):
+        return False, no_cell, no_area, no_cell
     lo_x, lo_v, hi_x, hi_v = np.empty(n_lo), np.empty(n_lo), np.empty(n_hi), np.empty(n_hi)
     # Each cell's own stretch of the axis, an interval and a metre clear of the next.
     u_min, u_max, base = np.empty(cells), np.empty(cells), np.empty(cells)
     cell_lo, cell_hi = np.empty(cells), np.empty(cells)
     lo_start, hi_start = np.empty(cells + 1, np.int64), np.empty(cells + 1, np.int64)
     total = 0.0
-    p, i_lo, i_hi = 0, 0, 0
+    p, i_lo, i_hi = 2, 0, 0
     for c in range(cells):
         m_lo, m_hi = sizes[c, 0], sizes[c, 1]
         first_lo, first_hi = packed[p], packed[p + 2 * m_lo]
@@ -226,10 +230,10 @@ def _laid_out(
             hi_x[i_hi] = packed[p + 2 * m_lo + j] + base[c]
             hi_v[i_hi] = packed[p + 2 * m_lo + m_hi + j]
             i_hi += 1
-        p += 2 * (m_lo + m_hi)
+        p += 2 * (m_lo + m_hi) + 2
     lo_start[cells], hi_start[cells] = n_lo, n_hi
     if not (_sorted(lo_x) and _sorted(hi_x) and _sorted(cell_lo)):
-        return False, odd_cell, no_area, no_cell  # searchsorted's own answer
+        return False, no_cell, no_area, no_cell  # searchsorted's own answer
     # Each chain's run per cell: np.searchsorted(chain_u, cell_lo, side="left"). The runs
     # are sorted, each past the last, so that is where the run starts but for a cell whose
     # chain starts left of its own u_min, which a chain never does: checked.
@@ -237,11 +241,11 @@ def _laid_out(
         if (lo_start[c] > 0 and not lo_x[lo_start[c] - 1] < cell_lo[c]) or not (
             lo_x[lo_start[c]] >= cell_lo[c]
         ):
-            return False, odd_cell, no_area, no_cell
+            return False, no_cell, no_area, no_cell
         if (hi_start[c] > 0 and not hi_x[hi_start[c] - 1] < cell_lo[c]) or not (
             hi_x[hi_start[c]] >= cell_lo[c]
         ):
-            return False, odd_cell, no_area, no_cell
+            return False, no_cell, no_area, no_cell
     cell_of_line = np.empty(n, dtype=np.int64)
     for c in range(cells):
         for i in range(offsets[c], offsets[c + 1]):
@@ -267,41 +271,58 @@ def _laid_out(
     for i in range(n):
         if not odd_cell[cell_of_line[i]]:
             strips += 1 + (i < n - 1 and overlap[i])
+    odd = np.flatnonzero(odd_cell)
     if strips == 0:
-        return True, odd_cell, no_area, no_cell
-    s0s, s1s = np.empty(strips), np.empty(strips)
-    a_s, b_s = np.empty(strips), np.empty(strips)
+        return True, odd, no_area, no_cell
+    # Each kept line's strip, then the overlaps' unions (np.concatenate's order).
+    r0, r1 = np.empty(strips), np.empty(strips)
+    r_a, r_b = np.empty(strips), np.empty(strips)
     j = 0
     for i in range(n):
         if not odd_cell[cell_of_line[i]]:
-            s0s[j] = s1[i - 1] if i > 0 and overlap[i - 1] else s0[i]
-            s1s[j] = s0[i + 1] if i < n - 1 and overlap[i] else s1[i]
-            a_s[j], b_s[j] = v_lo[i], v_hi[i]
+            r0[j] = s1[i - 1] if i > 0 and overlap[i - 1] else s0[i]
+            r1[j] = s0[i + 1] if i < n - 1 and overlap[i] else s1[i]
+            r_a[j], r_b[j] = v_lo[i], v_hi[i]
             j += 1
+    kept = j
     for i in range(n - 1):
         if overlap[i] and not odd_cell[cell_of_line[i]]:
-            s0s[j], s1s[j] = s0[i + 1], s1[i]
+            r0[j], r1[j] = s0[i + 1], s1[i]
             a0, a1, b0, b1 = v_lo[i], v_lo[i + 1], v_hi[i], v_hi[i + 1]
-            a_s[j] = a0 if (a0 < a1 or a0 != a0) else a1
-            b_s[j] = b0 if (b0 > b1 or b0 != b0) else b1
+            r_a[j] = a0 if (a0 < a1 or a0 != a0) else a1
+            r_b[j] = b0 if (b0 > b1 or b0 != b0) else b1
             j += 1
-    # np.argsort(kind="stable") of the starts: an insertion sort (strips come almost in order).
-    for i in range(1, strips):
-        key0, key1, key_a, key_b = s0s[i], s1s[i], a_s[i], b_s[i]
-        if key0 != key0:
-            return False, odd_cell, no_area, no_cell
-        at = i
-        while at > 0 and s0s[at - 1] > key0:
-            s0s[at], s1s[at], a_s[at], b_s[at] = s0s[at - 1], s1s[at - 1], a_s[at - 1], b_s[at - 1]
-            at -= 1
-        s0s[at], s1s[at], a_s[at], b_s[at] = key0, key1, key_a, key_b
+    # np.argsort(kind="stable") of the starts: both runs are in order (lines left to right),
+    # so merge them, the first run first on a tie; else an insertion sort.
+    if _sorted(r0[:kept]) and _sorted(r0[kept:]):
+        order = np.empty(strips, dtype=np.int64)
+        i, j = 0, kept
+        for q in range(strips):
+            if j >= strips or (i < kept and r0[i] <= r0[j]):
+                order[q] = i
+                i += 1
+            else:
+                order[q] = j
+                j += 1
+    else:
+        order = np.arange(strips)
+        for i in range(1, strips):
+            key = order[i]
+            if r0[key] != r0[key]:
+                return False, no_cell, no_area, no_cell
+            at = i
+            while at > 0 and r0[order[at - 1]] > r0[key]:
+                order[at] = order[at - 1]
+                at -= 1
+            order[at] = key
+    s0s, s1s, a_s, b_s = r0[order], r1[order], r_a[order], r_b[order]
     # The cuts: np.unique of the chains and the strips' ends (all sorted, so merged).
     if not (_sorted(s0s) and _sorted(s1s)):
         if not _sorted(s0s):
-            return False, odd_cell, no_area, no_cell
+            return False, no_cell, no_area, no_cell
         ends = np.sort(s1s)
         if ends[-1] != ends[-1]:
-            return False, odd_cell, no_area, no_cell
+            return False, no_cell, no_area, no_cell
     else:
         ends = s1s
     cuts = _merge(_merge(lo_x, hi_x), _merge(s0s, ends))
@@ -336,37 +357,34 @@ def _laid_out(
         )
         cell_of[pieces] = c
         pieces += 1
-    return True, odd_cell, area[:pieces], cell_of[:pieces]
+    return True, odd, area[:pieces], cell_of[:pieces]
 
 
-def chains_arrays(
-    u_ring: FloatArray, v_ring: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None:
-    """:func:`planner.coverage.convex_chains`' arrays, or None where numpy must decide."""
+def packed_chains(u_ring: FloatArray, v_ring: FloatArray) -> tuple[int, int, FloatArray] | None:
+    """Return :func:`planner.coverage.convex_chains` packed (``_chains``), or None for numpy."""
     u = np.ascontiguousarray(u_ring, dtype=np.float64)
     v = np.ascontiguousarray(v_ring, dtype=np.float64)
     if len(u) == 0 or len(u) != len(v):
         return None
-    ok, lo_u, lo_v, hi_u, hi_v = _chains(u, v)
-    return (lo_u, lo_v, hi_u, hi_v) if ok else None
+    n_lo, n_hi, packed = _chains(u, v)
+    return (n_lo, n_hi, packed) if n_lo >= 0 else None
 
 
 def laid_out(
     packed: FloatArray,
-    sizes: IntArray,
     offsets: IntArray,
     u: FloatArray,
     v_lo: FloatArray,
     v_hi: FloatArray,
     d: float,
-) -> tuple[BoolArray, FloatArray, IntArray] | None:
-    """Return the odd cells, pieces' areas and pieces' cells of ``coverage._laid_out`` (or None).
+) -> tuple[IntArray, FloatArray, IntArray] | None:
+    """Return ``coverage._laid_out``'s odd cells, pieces' areas and pieces' cells (or None).
 
-    ``offsets`` must start at 0 and end at ``len(u)``, one more than the cells.
+    ``packed``: each cell's ``Chains.packed`` in turn. ``offsets`` must start at 0 and end at
+    ``len(u)``.
     """
     ok, odd, area, cell = _laid_out(
         packed,
-        sizes,
         np.ascontiguousarray(offsets, dtype=np.int64),
         np.ascontiguousarray(u, dtype=np.float64),
         np.ascontiguousarray(v_lo, dtype=np.float64),

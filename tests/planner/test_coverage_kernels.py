@@ -23,7 +23,11 @@ LaidOut = tuple[dict[int, float], FloatArray, FloatArray]
 
 
 def same_chains(a: Chains, b: Chains) -> bool:
-    return all(same_bits(getattr(a, k), getattr(b, k)) for k in ("lo_u", "lo_v", "hi_u", "hi_v"))
+    """Same four arrays; and ``a.packed`` (if any) holds them."""
+    packed = a.packed is None or same_bits(a.packed, coverage._packed(a))
+    return packed and all(
+        same_bits(getattr(a, k), getattr(b, k)) for k in ("lo_u", "lo_v", "hi_u", "hi_v")
+    )
 
 
 def same_float(a: float, b: float) -> bool:
@@ -52,9 +56,8 @@ def both_ways(
     hi: FloatArray,
     d: float,
 ) -> None:
-    packed = np.concatenate([a for c in chains for a in (c.lo_u, c.lo_v, c.hi_u, c.hi_v)])
-    sizes = np.array([(len(c.lo_u), len(c.hi_u)) for c in chains], dtype=np.int64)
-    assert coverage_kernels.laid_out(packed, sizes, offsets, u, lo, hi, d) is not None
+    packed = np.concatenate([coverage._packed(c) for c in chains])
+    assert coverage_kernels.laid_out(packed, offsets, u, lo, hi, d) is not None
     assert_same_laid_out(
         coverage._laid_out(chains, offsets, u, lo, hi, d),
         coverage._laid_out_numpy(chains, offsets, u, lo, hi, d),
@@ -82,8 +85,8 @@ def test_chains_kernel_on_rings_with_ties_and_one_vertex() -> None:
 
 
 def test_chains_kernel_declines_nan() -> None:
-    assert coverage_kernels.chains_arrays(np.array([0.0, np.nan, 1.0]), np.zeros(3)) is None
-    assert coverage_kernels.chains_arrays(np.zeros(0), np.zeros(0)) is None
+    assert coverage_kernels.packed_chains(np.array([0.0, np.nan, 1.0]), np.zeros(3)) is None
+    assert coverage_kernels.packed_chains(np.zeros(0), np.zeros(0)) is None
 
 
 @settings(max_examples=120, deadline=None)
@@ -123,11 +126,13 @@ def test_laid_out_kernel_with_footprints_apart_along_the_lines() -> None:
 
 
 def test_laid_out_kernel_declines_chains_out_of_order() -> None:
-    packed = np.array([0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 2.0, 2.0, 1.0, 1.0])
-    sizes = np.array([[3, 2]])
+    # The lower chain steps back (u = 0, 2, 1): searchsorted's answer is numpy's to give.
+    packed = np.array([3.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 2.0, 2.0, 1.0, 1.0])
     one = np.ones(1)
-    fast = coverage_kernels.laid_out(packed, sizes, np.array([0, 1]), one, one * 0, one, 1.0)
-    assert fast is None
+    assert coverage_kernels.laid_out(packed, np.array([0, 1]), one, one * 0, one, 1.0) is None
+    # A header that does not match the arrays.
+    packed[0] = 4.0
+    assert coverage_kernels.laid_out(packed, np.array([0, 1]), one, one * 0, one, 1.0) is None
 
 
 def real_fields() -> list[shapely.Polygon]:
@@ -145,7 +150,7 @@ def test_kernels_equal_numpy_on_real_fields(vehicle: str, monkeypatch: pytest.Mo
     """Every chain and every laid-out measure that planning real fields asks for."""
     rings: list[tuple[FloatArray, FloatArray]] = []
     calls: list[tuple[object, ...]] = []
-    chains_kernel = coverage_kernels.chains_arrays
+    chains_kernel = coverage_kernels.packed_chains
     laid_out = coverage._laid_out
 
     def record_rings(u: FloatArray, v: FloatArray) -> object:
@@ -156,7 +161,7 @@ def test_kernels_equal_numpy_on_real_fields(vehicle: str, monkeypatch: pytest.Mo
         calls.append(args)
         return laid_out(*args)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(coverage_kernels, "chains_arrays", record_rings)
+    monkeypatch.setattr(coverage_kernels, "packed_chains", record_rings)
     monkeypatch.setattr(coverage, "_laid_out", record_calls)
     for field in real_fields():
         plan_coverage(field, interval_m=4.0, vehicle=vehicle)
