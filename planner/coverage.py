@@ -5,7 +5,8 @@ rectangle ``[u - d/2, u + d/2] × [v_lo, v_hi]``. The covered area of a cell is 
 across the sweep, of the length of ``[lo(u), hi(u)] ∩ [v_lo, v_hi]``, where ``lo`` and ``hi``
 are the cell's lower and upper chains. Both chains are piecewise linear, so the integral is
 exact when cut at their vertices and where they cross the footprint's ends. This costs
-O(lines + vertices) in numpy, where intersecting 1,000 footprints with shapely costs ~25 ms.
+O(lines + vertices), where intersecting 1,000 footprints with shapely costs ~25 ms; the hot
+paths run as compiled loops (:mod:`planner.coverage_kernels`), this numpy code their reference.
 """
 
 from __future__ import annotations
@@ -34,14 +35,15 @@ class Chains:
         Upper chain, ``u`` non-decreasing.
     packed : ndarray or None
         ``[len(lo_u), len(hi_u), *lo_u, *lo_v, *hi_u, *hi_v]``, whose views the four arrays
-        are, for the compiled loops (:mod:`planner.coverage_kernels`); None if not made so.
+        are, for the compiled loops (:mod:`planner.coverage_kernels`): set by
+        :func:`convex_chains` only (not an argument, so ``dataclasses.replace`` drops it).
     """
 
     lo_u: FloatArray
     lo_v: FloatArray
     hi_u: FloatArray
     hi_v: FloatArray
-    packed: FloatArray | None = field(default=None, repr=False, compare=False)
+    packed: FloatArray | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def u_min(self) -> float:
@@ -70,7 +72,9 @@ def convex_chains(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
         return convex_chains_numpy(u_ring, v_ring)
     n_lo, n_hi, p = fast
     lo, hi = 2 + n_lo, 2 + 2 * n_lo
-    return Chains(p[2:lo], p[lo:hi], p[hi : hi + n_hi], p[hi + n_hi :], p)
+    chains = Chains(p[2:lo], p[lo:hi], p[hi : hi + n_hi], p[hi + n_hi :])
+    object.__setattr__(chains, "packed", p)  # frozen: set once, here
+    return chains
 
 
 def convex_chains_numpy(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
