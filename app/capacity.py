@@ -17,8 +17,9 @@ from typing import Annotated
 
 from fastapi import Depends
 
+from app.dependencies import SettingsDep
 from app.errors import ServerBusyError
-from app.settings import Settings, get_settings
+from app.settings import Settings
 
 
 class HeavyWork:
@@ -94,7 +95,7 @@ def _heavy_work(slots: int, queue: int, wait_s: float) -> HeavyWork:
     return HeavyWork(slots=slots, queue=queue, wait_s=wait_s)
 
 
-def get_heavy_work(settings: Annotated[Settings, Depends(get_settings)]) -> HeavyWork:
+def get_heavy_work(settings: Settings) -> HeavyWork:
     """Return the process's :class:`HeavyWork` for ``settings`` (one per configuration)."""
     return _heavy_work(
         settings.heavy_work_slots, settings.heavy_work_queue, settings.heavy_work_wait_s
@@ -102,7 +103,7 @@ def get_heavy_work(settings: Annotated[Settings, Depends(get_settings)]) -> Heav
 
 
 async def _heavy_work_dependency(
-    settings: Annotated[Settings, Depends(get_settings)],
+    settings: SettingsDep,
 ) -> HeavyWork:
     # Async: a look-up in a cache, not worth a thread hop per request.
     return get_heavy_work(settings)

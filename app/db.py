@@ -42,8 +42,8 @@ from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import DeclarativeBase, Session
 from sqlalchemy.pool import NullPool
 
+from app.dependencies import SettingsDep
 from app.errors import ConflictError, DatabaseBusyError, NotFoundError
-from app.settings import Settings, get_settings
 
 #: Alembic's recommended constraint names, so that migrations can name what they drop.
 NAMING_CONVENTION: dict[str, str] = {
@@ -143,7 +143,7 @@ def get_engine(url: str) -> Engine:
 
 
 async def get_session(
-    settings: Annotated[Settings, Depends(get_settings)],
+    settings: SettingsDep,
 ) -> AsyncIterator[Session]:
     """Yield a session on the configured database, closed after the request.
 

@@ -42,8 +42,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     Parameters
     ----------
     settings : Settings, optional
-        Settings to use instead of the environment's (they then also replace the
-        ``get_settings`` dependency, so the database and the page see them too).
+        Settings to use instead of the environment's (the routes' dependencies then hand out
+        these, so the database and the page see them too: :mod:`app.dependencies`).
 
     Returns
     -------
@@ -77,10 +77,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         docs_url=None,
         redoc_url=None,
     )
-    if settings is not None:
-        app.dependency_overrides[get_settings] = lambda: settings
-    else:
-        settings = get_settings()
+    # What the routes' dependencies hand out (app.dependencies): no override of get_settings,
+    # since any dependency override makes FastAPI rebuild every dependency of every request.
+    settings = resolved
+    app.state.settings = settings
 
     app.include_router(plans.router, prefix=API_PREFIX)
     app.include_router(simulations.router, prefix=API_PREFIX)

@@ -33,9 +33,10 @@ from app.auth_schemas import (
     UserRead,
 )
 from app.db import SessionDep
+from app.dependencies import SettingsDep
 from app.errors import ConflictError
 from app.schemas import ErrorRead
-from app.settings import Settings, get_settings
+from app.settings import Settings
 
 router = APIRouter(tags=["accounts"])
 
@@ -104,7 +105,7 @@ def sign_up(
     request: Request,
     session: SessionDep,
     response: Response,
-    settings: Settings = Depends(get_settings),  # noqa: B008
+    settings: SettingsDep,
 ) -> MeRead:
     """Create the first account of an empty server (its owner) and sign in."""
     user = accounts.sign_up_first(session, body.username, body.password, body.organisation)
@@ -122,7 +123,7 @@ def log_in(
     request: Request,
     session: SessionDep,
     response: Response,
-    settings: Settings = Depends(get_settings),  # noqa: B008
+    settings: SettingsDep,
 ) -> MeRead:
     """Sign in: sets the `HttpOnly`, `SameSite=Lax` session cookie; answers the CSRF token.
 
@@ -144,7 +145,7 @@ def log_out(
     user: CurrentUser,
     creds: CredentialsDep,
     session: SessionDep,
-    settings: Settings = Depends(get_settings),  # noqa: B008
+    settings: SettingsDep,
 ) -> Response:
     """Sign out: the session ends at once (a token is revoked with `DELETE /api/tokens/{id}`)."""
     if creds.login_session is not None:

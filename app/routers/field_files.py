@@ -10,19 +10,17 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, File, Response, UploadFile, status
+from fastapi import APIRouter, File, Response, UploadFile, status
 
 from app.auth import Planner, Viewer
 from app.db import SessionDep
+from app.dependencies import SettingsDep
 from app.errors import UploadTooLargeError
 from app.field_import import FieldImportRead, import_fields
 from app.schemas import ErrorRead
-from app.settings import Settings, get_settings
 from planner.io import fields_to_geojson, read_fields
 
 router = APIRouter(prefix="/fields", tags=["fields"])
-
-SettingsDep = Annotated[Settings, Depends(get_settings)]
 
 
 @router.post(

@@ -11,9 +11,8 @@ import hashlib
 import json
 import logging
 from pathlib import Path
-from typing import Annotated
 
-from fastapi import APIRouter, Depends, FastAPI, Request
+from fastapi import APIRouter, FastAPI, Request
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
@@ -21,8 +20,8 @@ from jinja2 import pass_context
 from starlette.routing import NoMatchFound
 
 from app import i18n
+from app.dependencies import SettingsDep
 from app.resources import resource_root
-from app.settings import Settings, get_settings
 
 logger = logging.getLogger(__name__)
 
@@ -107,9 +106,7 @@ def api_docs(request: Request) -> HTMLResponse:
 
 
 @router.get("/", response_class=HTMLResponse, name="map_page")
-def map_page(
-    request: Request, settings: Annotated[Settings, Depends(get_settings)]
-) -> HTMLResponse:
+def map_page(request: Request, settings: SettingsDep) -> HTMLResponse:
     """Render the map page: draw a field, plan a path, save and download it."""
     plans_url = _plans_api_url(request)
     lang = i18n.negotiate_language(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, Path, Query, Response, status
+from fastapi import APIRouter, Path, Query, Response, status
 from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.orm import Session
 
@@ -12,13 +12,12 @@ from app import fields, services
 from app.auth import Planner, Viewer
 from app.capacity import HeavyWorkDep
 from app.db import SessionDep, copy_row, delete_row, end_reads, write
+from app.dependencies import SettingsDep
 from app.models import Plan
 from app.routers.downloads import download
 from app.schemas import ErrorRead, ExportFormat, PlanCreate, PlanList, PlanRead
-from app.settings import Settings, get_settings
 
 router = APIRouter(prefix="/plans", tags=["plans"])
-SettingsDep = Annotated[Settings, Depends(get_settings)]
 
 _BAD_INPUT: dict[int | str, dict[str, Any]] = {
     422: {"model": ErrorRead, "description": "The input named in `detail` is wrong"}

@@ -4,17 +4,17 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, File, Form, Query, Response, UploadFile, status
+from fastapi import APIRouter, File, Form, Query, Response, UploadFile, status
 
 from app import live, runs, services
 from app.auth import FixPoster, Planner, Viewer, forbidden
 from app.capacity import HeavyWorkDep
 from app.db import SessionDep, end_reads
+from app.dependencies import SettingsDep
 from app.errors import UploadTooLargeError
 from app.models import PLAN_NAME_MAX_LENGTH, Plan
 from app.routers.downloads import download
 from app.schemas import ErrorRead, FixesAdded, FixIn, PlanRead, RunList, RunRead
-from app.settings import Settings, get_settings
 from app.track_fixes import MAX_TIME_TEXT, check_text, parse_time
 from app.tracks import read_track
 
@@ -36,7 +36,6 @@ _BUSY: dict[int | str, dict[str, Any]] = {
     503: {"model": ErrorRead, "description": "Server busy: retry after `Retry-After` seconds"}
 }
 
-SettingsDep = Annotated[Settings, Depends(get_settings)]
 ThresholdQuery = Annotated[
     float,
     Query(

@@ -11,7 +11,8 @@ from typing import Any
 import shapely
 from starlette.testclient import TestClient
 
-from app.settings import Settings, get_settings
+from app.dependencies import request_settings
+from app.settings import Settings
 from tests.conftest import FIELDS_DIR, PAPER_FIELD
 from tests.planner.field_files import google_earth_kmz_bytes, shared_polygon
 from tests.planner.test_io_safety import BILLION_LAUGHS
@@ -74,9 +75,9 @@ def test_hostile_and_unreadable_files_are_a_422_naming_the_file(client: TestClie
 
 
 def test_an_upload_over_the_limit_is_a_413(app: Any, client: TestClient) -> None:
-    app.dependency_overrides[get_settings] = lambda: Settings(max_upload_bytes=1000)
+    app.dependency_overrides[request_settings] = lambda: Settings(max_upload_bytes=1000)
     try:
         response = parse(client, "big.geojson", json.dumps({"pad": "x" * 2000}).encode())
     finally:
-        del app.dependency_overrides[get_settings]
+        del app.dependency_overrides[request_settings]
     assert response.status_code == 413

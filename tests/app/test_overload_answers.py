@@ -14,7 +14,8 @@ from fastapi import FastAPI
 from starlette.testclient import TestClient
 
 from app.capacity import get_heavy_work
-from app.settings import Settings, get_settings
+from app.dependencies import request_settings
+from app.settings import Settings
 
 
 def a_plan(client: TestClient, body: dict[str, Any]) -> dict[str, Any]:
@@ -90,7 +91,7 @@ def test_a_saturated_server_answers_503_with_retry_after(
     app: FastAPI, client_as: Callable[[str | None], TestClient], paper_body: dict[str, Any]
 ):
     settings = Settings(database_url="sqlite://", heavy_work_slots=1, heavy_work_queue=0)
-    app.dependency_overrides[get_settings] = lambda: settings
+    app.dependency_overrides[request_settings] = lambda: settings
     heavy = get_heavy_work(settings)
     with client_as("owner") as client:
         a_plan(client, paper_body)
