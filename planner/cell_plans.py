@@ -72,16 +72,7 @@ def plan_heading(
     ``parts`` may be prepared by :func:`planner.decomposition.sweep_rings` (many headings).
     """
     rings = [ring for part in parts for ring in decompose_sweep(part, heading)]
-    scan = scan_cells(rings, d, edge_m=edge_m)
-    cells = [
-        Cell(
-            u_ring,
-            v_ring,
-            convex_chains(u_ring, v_ring),
-            slice(scan.offsets[c], scan.offsets[c + 1]),
-        )
-        for c, (u_ring, v_ring) in enumerate(rings)
-    ]
+    scan, cells = _scan_cells(rings, d, edge_m)
     aggregates = aggregate_scan(scan)
     lengths = combine_variants(aggregates, None, None)
     eu, ev, xu, xv = variant_ends(scan, aggregates)
@@ -95,6 +86,58 @@ def plan_heading(
         [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
     )
     return CellPlan(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
+
+
+def _scan_cells(
+    rings: list[tuple[FloatArray, FloatArray]], d: float, edge_m: float
+) -> tuple[LineScan, list[Cell]]:
+    """Scan the lines of ``rings`` and split each into its chains, compiled.
+
+    :func:`scan_cells_numpy` is the reference (``tests/planner/test_cell_kernels.py``).
+    """
+    if not rings:
+        return scan_cells_numpy(rings, d, edge_m)
+    from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+    u = np.concatenate([r[0] for r in rings])
+    v = np.concatenate([r[1] for r in rings])
+    sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
+    offsets, line_u, v_lo, v_hi = cell_kernels.scan_rings(u, v, sizes, d, edge_m)
+    scan = LineScan(np.zeros(len(rings)), offsets, line_u, v_lo, v_hi)
+    lo_u, lo_v, lo_at, hi_u, hi_v, hi_at = cell_kernels.ring_chains(u, v, sizes)
+    lo, hi, lines = lo_at.tolist(), hi_at.tolist(), offsets.tolist()
+    cells = [
+        Cell(
+            u_ring,
+            v_ring,
+            Chains(
+                lo_u[lo[c] : lo[c + 1]],
+                lo_v[lo[c] : lo[c + 1]],
+                hi_u[hi[c] : hi[c + 1]],
+                hi_v[hi[c] : hi[c + 1]],
+            ),
+            slice(lines[c], lines[c + 1]),
+        )
+        for c, (u_ring, v_ring) in enumerate(rings)
+    ]
+    return scan, cells
+
+
+def scan_cells_numpy(
+    rings: list[tuple[FloatArray, FloatArray]], d: float, edge_m: float
+) -> tuple[LineScan, list[Cell]]:
+    """:func:`_scan_cells` in numpy: the reference for its compiled loops."""
+    scan = scan_cells(rings, d, edge_m=edge_m)
+    cells = [
+        Cell(
+            u_ring,
+            v_ring,
+            convex_chains(u_ring, v_ring),
+            slice(scan.offsets[c], scan.offsets[c + 1]),
+        )
+        for c, (u_ring, v_ring) in enumerate(rings)
+    ]
+    return scan, cells
 
 
 def reach_headland(plan: CellPlan, d: float) -> CellPlan:

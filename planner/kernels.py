@@ -530,3 +530,6 @@ def warm_up() -> None:
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
     coverage_excess(ring_u, ring_v, 1.0)
     length_aggregates(ring_u, ring_v, 1.0)
+    from planner import cell_kernels  # it imports this module
+
+    cell_kernels.warm_up()
