@@ -509,6 +509,142 @@ def ring_chains(
     return _chains(u, v, starts, sizes)
 
 
+@_jit
+def _order_costs(
+    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, orders: IntArray
+) -> FloatArray:
+    """``planner.cell_order._Problem.costs``: the best variants' route length of each order."""
+    k_orders, n = orders.shape
+    out = np.empty(k_orders)
+    here = np.empty(4)
+    after = np.empty(4)
+    for k in range(k_orders):
+        c = orders[k, 0]
+        for j in range(4):
+            here[j] = first[c, j]
+        for t in range(1, n):
+            a, b = orders[k, t - 1], orders[k, t]
+            for j in range(4):
+                best = here[0] + move[a, 0, b, j]
+                for i in range(1, 4):
+                    best = _min_nan(best, here[i] + move[a, i, b, j])
+                after[j] = best + inner[b, j]
+            for j in range(4):
+                here[j] = after[j]
+        c = orders[k, n - 1]
+        best = here[0] + last[c, 0]
+        for j in range(1, 4):
+            best = _min_nan(best, here[j] + last[c, j])
+        out[k] = best
+    return out
+
+
+@_jit
+def _min_nan(best: float, x: float) -> float:
+    """One step of ``np.min``: NaN wins, else the smaller."""
+    if best != best:
+        return best
+    return x if (x < best or x != x) else best
+
+
+@_jit
+def _order_variants(
+    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, order: IntArray
+) -> IntArray:
+    """``planner.cell_order._Problem.variants``: Viterbi with back-pointers (``np.argmin``)."""
+    n = len(order)
+    back = np.empty((n, 4), dtype=np.int64)
+    here = np.empty(4)
+    after = np.empty(4)
+    for j in range(4):
+        here[j] = first[order[0], j]
+    for t in range(1, n):
+        a, b = order[t - 1], order[t]
+        for j in range(4):
+            best = here[0] + move[a, 0, b, j]
+            arg = 0
+            for i in range(1, 4):
+                x = here[i] + move[a, i, b, j]
+                if best == best and (x < best or x != x):
+                    best, arg = x, i
+            back[t, j] = arg
+            after[j] = best + inner[b, j]
+        for j in range(4):
+            here[j] = after[j]
+    chosen = np.empty(n, dtype=np.int64)
+    c = order[n - 1]
+    best = here[0] + last[c, 0]
+    w = 0
+    for j in range(1, 4):
+        x = here[j] + last[c, j]
+        if best == best and (x < best or x != x):
+            best, w = x, j
+    chosen[n - 1] = w
+    for t in range(n - 1, 0, -1):
+        w = back[t, w]
+        chosen[t - 1] = w
+    return chosen
+
+
+@_jit
+def _order_greedy(move: FloatArray, first: FloatArray, inner: FloatArray) -> IntArray:
+    """``planner.cell_order._Problem.greedy``: nearest cell next (``np.argmin``'s first)."""
+    m = len(inner)
+    current = 0
+    best = np.inf
+    for c in range(m):
+        row_min = first[c, 0]
+        for j in range(1, 4):
+            row_min = _min_nan(row_min, first[c, j])
+        if c == 0 or (best == best and (row_min < best or row_min != row_min)):
+            best, current = row_min, c
+    w_here = 0
+    for j in range(1, 4):
+        x = first[current, j]
+        y = first[current, w_here]
+        if y == y and (x < y or x != x):
+            w_here = j
+    order = np.empty(m, dtype=np.int64)
+    order[0] = current
+    visited = np.zeros(m, dtype=np.bool_)
+    visited[current] = True
+    for step in range(1, m):
+        best = np.inf
+        flat = -1
+        for c in range(m):
+            for j in range(4):
+                x = np.inf if visited[c] else move[current, w_here, c, j] + inner[c, j]
+                if flat < 0 or (best == best and (x < best or x != x)):
+                    best, flat = x, c * 4 + j
+        current, w_here = flat // 4, flat % 4
+        order[step] = current
+        visited[current] = True
+    return order
+
+
+def order_costs(
+    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, orders: IntArray
+) -> FloatArray:
+    """Route length of the best variants of each of ``orders`` (K, m), compiled.
+
+    ``move`` is (m, 4, m, 4), ``first``, ``last`` and ``inner`` (m, 4), all float64 and
+    C-contiguous (:class:`planner.cell_order._Problem`).
+    """
+    return _order_costs(move, first, last, inner, np.ascontiguousarray(orders))
+
+
+def order_variants(
+    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, order: IntArray
+) -> IntArray:
+    """Choose the best variant of every cell of ``order``, compiled."""
+    return _order_variants(move, first, last, inner, np.ascontiguousarray(order))
+
+
+def order_greedy(move: FloatArray, first: FloatArray, inner: FloatArray) -> IntArray:
+    """Nearest cell next, from the cell that begins best, compiled."""
+    return _order_greedy(move, first, inner)
+
+
 def warm_up() -> None:
     """Compile the kernels, or load them from the disk cache, on a tiny field."""
     # An L: one cut through its inner corner, three cells at 135°.
@@ -523,3 +659,8 @@ def warm_up() -> None:
     sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
     scan_rings(u, v, sizes, 4.0, 2.0)
     ring_chains(u, v, sizes)
+    move = np.ones((2, 4, 2, 4))
+    ends = np.zeros((2, 4))
+    order_costs(move, ends, ends, ends, np.array([[0, 1], [1, 0]]))
+    order_variants(move, ends, ends, ends, np.array([0, 1]))
+    order_greedy(move, ends, ends)

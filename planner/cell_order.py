@@ -108,14 +108,14 @@ def order_cells(
 
     if m <= EXHAUSTIVE_MAX_CELLS:
         orders = _permutations(m)
-        costs = np.round(problem.costs(orders), 9)
-        return problem.variants(orders[int(np.argmin(costs))])
-    candidates = np.stack([problem.greedy(), np.arange(m)])  # nearest next; sweep order
-    costs = np.round(problem.costs(candidates), 9)
+        costs = np.round(problem.search_costs(orders), 9)
+        return problem.search_variants(orders[int(np.argmin(costs))])
+    candidates = np.stack([problem.search_greedy(), np.arange(m)])  # nearest next; sweep order
+    costs = np.round(problem.search_costs(candidates), 9)
     order = candidates[int(np.argmin(costs))]
     if improve and m <= LOCAL_SEARCH_MAX_CELLS:
         order = problem.improve(order)
-    return problem.variants(order)
+    return problem.search_variants(order)
 
 
 class _Problem:
@@ -125,6 +125,42 @@ class _Problem:
         self, move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray
     ) -> None:
         self.move, self.first, self.last, self.inner = move, first, last, inner
+        # The searches run compiled (planner.cell_kernels, the same figures) on float64 costs;
+        # the methods below stay the numpy reference.
+        self.compiled = all(a.dtype == np.float64 for a in (move, first, last, inner))
+        if self.compiled:
+            self._arrays = (
+                np.ascontiguousarray(move),
+                np.ascontiguousarray(first),
+                np.ascontiguousarray(last),
+                np.ascontiguousarray(inner),
+            )
+
+    def search_costs(self, orders: IntArray) -> FloatArray:
+        """:meth:`costs`, compiled where it can be."""
+        if not self.compiled:
+            return self.costs(orders)
+        from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+        return cell_kernels.order_costs(*self._arrays, orders)
+
+    def search_variants(self, order: IntArray) -> list[tuple[int, int]]:
+        """:meth:`variants`, compiled where it can be."""
+        if not self.compiled:
+            return self.variants(order)
+        from planner import cell_kernels
+
+        chosen = cell_kernels.order_variants(*self._arrays, order)
+        return list(zip(order.tolist(), chosen.tolist(), strict=True))
+
+    def search_greedy(self) -> IntArray:
+        """:meth:`greedy`, compiled where it can be."""
+        if not self.compiled:
+            return self.greedy()
+        from planner import cell_kernels
+
+        move, first, _, inner = self._arrays
+        return cell_kernels.order_greedy(move, first, inner)
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         """Return the moves from every variant of cells ``a`` to those of cells ``b``, (K, 4, 4)."""
@@ -177,10 +213,13 @@ class _Problem:
     def improve(self, order: IntArray) -> IntArray:
         """Best 2-opt reversal or single-cell move, repeatedly, while it shortens the route."""
         neighbourhood, changed, rank = _neighbourhood(len(order))
-        best = float(self.costs(order[None])[0])
+        best = float(self.search_costs(order[None])[0])
         for _ in range(_MAX_ROUNDS):
             candidates = order[neighbourhood]
-            costs = self.costs_from(order, candidates, changed)
+            if self.compiled:  # every candidate in full: the figures of costs_from
+                costs = self.search_costs(candidates)
+            else:
+                costs = self.costs_from(order, candidates, changed)
             # The first of equals in the search's own order (``rank``), as before.
             ties = np.flatnonzero(costs == costs.min())
             k = int(ties[np.argmin(rank[ties])])
@@ -270,6 +309,7 @@ class _StraightProblem(_Problem):
     def __init__(self, cells: CellVariants, first: FloatArray, last: FloatArray) -> None:
         super().__init__(np.empty((0, 4, 0, 4)), first, last, cells.inner_m)
         self.exit_xy, self.entry_xy = cells.exit_xy, cells.entry_xy
+        self.compiled = False  # its moves are computed as needed, in numpy
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         gap = self.exit_xy[a][:, :, None, :] - self.entry_xy[b][:, None, :, :]

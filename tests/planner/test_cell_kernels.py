@@ -12,7 +12,14 @@ from hypothesis import strategies as st
 from shapely import Polygon
 
 from planner import cell_kernels
-from planner.cell_plans import _scan_cells, scan_cells_numpy
+from planner.cell_order import (
+    EXHAUSTIVE_MAX_CELLS,
+    LOCAL_SEARCH_MAX_CELLS,
+    _neighbourhood,
+    _permutations,
+    _Problem,
+)
+from planner.cell_plans import _scan_cells, plan_heading, scan_cells_numpy
 from planner.decomposition import (
     _cuts,
     _pieces,
@@ -139,3 +146,61 @@ def test_real_fields_compiled_equal_numpy(part: int) -> None:
 
 def test_warm_up_runs() -> None:
     cell_kernels.warm_up()
+
+
+def problems(seed: int, count: int) -> list[_Problem]:
+    """Random ordering problems: 2 to 40 cells, some with whole-metre costs (ties)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(count):
+        m = int(rng.integers(2, 41))
+        move = rng.uniform(0.0, 100.0, (m, 4, m, 4))
+        first, last, inner = (rng.uniform(0.0, 50.0, (m, 4)) for _ in range(3))
+        if k % 3 == 0:
+            move, first, last, inner = (np.round(a) for a in (move, first, last, inner))
+        if k % 5 == 0:
+            move[rng.uniform(size=move.shape) < 0.05] = np.inf  # unreachable, round a hole
+        out.append(_Problem(move, first, last, inner))
+    return out
+
+
+def assert_same_searches(problem: _Problem, rng: np.random.Generator) -> None:
+    m = len(problem.inner)
+    if m <= EXHAUSTIVE_MAX_CELLS:
+        orders = _permutations(m)
+    else:
+        orders = np.stack([rng.permutation(m) for _ in range(20)])
+    assert problem.compiled
+    assert same_bits(problem.search_costs(orders), problem.costs(orders))
+    for order in orders[:5]:
+        assert problem.search_variants(order) == problem.variants(order)
+    assert np.array_equal(problem.search_greedy(), problem.greedy())
+    if m <= LOCAL_SEARCH_MAX_CELLS:
+        neighbourhood, changed, _ = _neighbourhood(m)
+        candidates = orders[0][neighbourhood]
+        fast = problem.search_costs(candidates)
+        assert same_bits(fast, problem.costs_from(orders[0], candidates, changed))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_order_searches_compiled_equal_numpy(seed: int) -> None:
+    rng = np.random.default_rng(300 + seed)
+    for problem in problems(seed, 60):
+        assert_same_searches(problem, rng)
+
+
+def test_order_searches_of_real_fields_compiled_equal_numpy() -> None:
+    rng = np.random.default_rng(7)
+    for field in local_real_fields()[::3]:
+        for heading in (0.0, 60.0, 120.0):
+            plan = plan_heading([field], heading, 4.0, None, None, 2.0)
+            cells = plan.variants
+            m = len(cells.inner_m)
+            if m < 2 or m > LOCAL_SEARCH_MAX_CELLS:
+                continue
+            ex, en = cells.exit_xy.reshape(m * 4, 2), cells.entry_xy.reshape(m * 4, 2)
+            move = np.hypot(ex[:, None, 0] - en[None, :, 0], ex[:, None, 1] - en[None, :, 1])
+            start = np.asarray(field.exterior.coords[0])
+            first = cells.inner_m + np.hypot(*(cells.entry_xy - start).transpose(2, 0, 1))
+            problem = _Problem(move.reshape(m, 4, m, 4), first, np.zeros((m, 4)), cells.inner_m)
+            assert_same_searches(problem, rng)
