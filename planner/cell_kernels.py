@@ -510,8 +510,27 @@ def ring_chains(
 
 
 @_jit
+def _move(
+    move: FloatArray, exits: FloatArray, entries: FloatArray, a: int, i: int, b: int, j: int
+) -> float:
+    """Return the move from the exit of ``(a, i)`` to the entry of ``(b, j)`` (``move``).
+
+    Straight (``move`` empty) as ``planner.cell_order._StraightProblem`` computes it.
+    """
+    if move.shape[0] == 0:
+        return float(np.hypot(exits[a, i, 0] - entries[b, j, 0], exits[a, i, 1] - entries[b, j, 1]))
+    return float(move[a, i, b, j])
+
+
+@_jit
 def _order_costs(
-    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, orders: IntArray
+    move: FloatArray,
+    exits: FloatArray,
+    entries: FloatArray,
+    first: FloatArray,
+    last: FloatArray,
+    inner: FloatArray,
+    orders: IntArray,
 ) -> FloatArray:
     """``planner.cell_order._Problem.costs``: the best variants' route length of each order."""
     k_orders, n = orders.shape
@@ -525,9 +544,9 @@ def _order_costs(
         for t in range(1, n):
             a, b = orders[k, t - 1], orders[k, t]
             for j in range(4):
-                best = here[0] + move[a, 0, b, j]
+                best = here[0] + _move(move, exits, entries, a, 0, b, j)
                 for i in range(1, 4):
-                    best = _min_nan(best, here[i] + move[a, i, b, j])
+                    best = _min_nan(best, here[i] + _move(move, exits, entries, a, i, b, j))
                 after[j] = best + inner[b, j]
             for j in range(4):
                 here[j] = after[j]
@@ -549,7 +568,13 @@ def _min_nan(best: float, x: float) -> float:
 
 @_jit
 def _order_variants(
-    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, order: IntArray
+    move: FloatArray,
+    exits: FloatArray,
+    entries: FloatArray,
+    first: FloatArray,
+    last: FloatArray,
+    inner: FloatArray,
+    order: IntArray,
 ) -> IntArray:
     """``planner.cell_order._Problem.variants``: Viterbi with back-pointers (``np.argmin``)."""
     n = len(order)
@@ -561,10 +586,10 @@ def _order_variants(
     for t in range(1, n):
         a, b = order[t - 1], order[t]
         for j in range(4):
-            best = here[0] + move[a, 0, b, j]
+            best = here[0] + _move(move, exits, entries, a, 0, b, j)
             arg = 0
             for i in range(1, 4):
-                x = here[i] + move[a, i, b, j]
+                x = here[i] + _move(move, exits, entries, a, i, b, j)
                 if best == best and (x < best or x != x):
                     best, arg = x, i
             back[t, j] = arg
@@ -587,7 +612,9 @@ def _order_variants(
 
 
 @_jit
-def _order_greedy(move: FloatArray, first: FloatArray, inner: FloatArray) -> IntArray:
+def _order_greedy(
+    move: FloatArray, exits: FloatArray, entries: FloatArray, first: FloatArray, inner: FloatArray
+) -> IntArray:
     """``planner.cell_order._Problem.greedy``: nearest cell next (``np.argmin``'s first)."""
     m = len(inner)
     current = 0
@@ -613,7 +640,11 @@ def _order_greedy(move: FloatArray, first: FloatArray, inner: FloatArray) -> Int
         flat = -1
         for c in range(m):
             for j in range(4):
-                x = np.inf if visited[c] else move[current, w_here, c, j] + inner[c, j]
+                x = (
+                    np.inf
+                    if visited[c]
+                    else _move(move, exits, entries, current, w_here, c, j) + inner[c, j]
+                )
                 if flat < 0 or (best == best and (x < best or x != x)):
                     best, flat = x, c * 4 + j
         current, w_here = flat // 4, flat % 4
@@ -623,26 +654,41 @@ def _order_greedy(move: FloatArray, first: FloatArray, inner: FloatArray) -> Int
 
 
 def order_costs(
-    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, orders: IntArray
+    move: FloatArray,
+    exits: FloatArray,
+    entries: FloatArray,
+    first: FloatArray,
+    last: FloatArray,
+    inner: FloatArray,
+    orders: IntArray,
 ) -> FloatArray:
     """Route length of the best variants of each of ``orders`` (K, m), compiled.
 
-    ``move`` is (m, 4, m, 4), ``first``, ``last`` and ``inner`` (m, 4), all float64 and
+    ``move`` is (m, 4, m, 4), or (0, 4, 0, 4) for straight moves from ``exits`` to
+    ``entries`` (m, 4, 2); ``first``, ``last`` and ``inner`` are (m, 4); all float64 and
     C-contiguous (:class:`planner.cell_order._Problem`).
     """
-    return _order_costs(move, first, last, inner, np.ascontiguousarray(orders))
+    return _order_costs(move, exits, entries, first, last, inner, np.ascontiguousarray(orders))
 
 
 def order_variants(
-    move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray, order: IntArray
+    move: FloatArray,
+    exits: FloatArray,
+    entries: FloatArray,
+    first: FloatArray,
+    last: FloatArray,
+    inner: FloatArray,
+    order: IntArray,
 ) -> IntArray:
-    """Choose the best variant of every cell of ``order``, compiled."""
-    return _order_variants(move, first, last, inner, np.ascontiguousarray(order))
+    """Choose the best variant of every cell of ``order``, compiled (:func:`order_costs`)."""
+    return _order_variants(move, exits, entries, first, last, inner, np.ascontiguousarray(order))
 
 
-def order_greedy(move: FloatArray, first: FloatArray, inner: FloatArray) -> IntArray:
-    """Nearest cell next, from the cell that begins best, compiled."""
-    return _order_greedy(move, first, inner)
+def order_greedy(
+    move: FloatArray, exits: FloatArray, entries: FloatArray, first: FloatArray, inner: FloatArray
+) -> IntArray:
+    """Nearest cell next, from the cell that begins best, compiled (:func:`order_costs`)."""
+    return _order_greedy(move, exits, entries, first, inner)
 
 
 def warm_up() -> None:
@@ -660,7 +706,8 @@ def warm_up() -> None:
     scan_rings(u, v, sizes, 4.0, 2.0)
     ring_chains(u, v, sizes)
     move = np.ones((2, 4, 2, 4))
+    xy = np.zeros((2, 4, 2))
     ends = np.zeros((2, 4))
-    order_costs(move, ends, ends, ends, np.array([[0, 1], [1, 0]]))
-    order_variants(move, ends, ends, ends, np.array([0, 1]))
-    order_greedy(move, ends, ends)
+    order_costs(move, xy, xy, ends, ends, ends, np.array([[0, 1], [1, 0]]))
+    order_variants(move, xy, xy, ends, ends, ends, np.array([0, 1]))
+    order_greedy(move, xy, xy, ends, ends)

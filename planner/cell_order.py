@@ -125,15 +125,22 @@ class _Problem:
         self, move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray
     ) -> None:
         self.move, self.first, self.last, self.inner = move, first, last, inner
+        self._compile(move, np.empty((0, 4, 2)), np.empty((0, 4, 2)))
+
+    def _compile(self, move: FloatArray, exits: FloatArray, entries: FloatArray) -> None:
         # The searches run compiled (planner.cell_kernels, the same figures) on float64 costs;
         # the methods below stay the numpy reference.
-        self.compiled = all(a.dtype == np.float64 for a in (move, first, last, inner))
+        arrays = (move, exits, entries, self.first, self.last, self.inner)
+        self.compiled = all(a.dtype == np.float64 for a in arrays)
         if self.compiled:
+            c = np.ascontiguousarray
             self._arrays = (
-                np.ascontiguousarray(move),
-                np.ascontiguousarray(first),
-                np.ascontiguousarray(last),
-                np.ascontiguousarray(inner),
+                c(move),
+                c(exits),
+                c(entries),
+                c(self.first),
+                c(self.last),
+                c(self.inner),
             )
 
     def search_costs(self, orders: IntArray) -> FloatArray:
@@ -159,8 +166,8 @@ class _Problem:
             return self.greedy()
         from planner import cell_kernels
 
-        move, first, _, inner = self._arrays
-        return cell_kernels.order_greedy(move, first, inner)
+        move, exits, entries, first, _, inner = self._arrays
+        return cell_kernels.order_greedy(move, exits, entries, first, inner)
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         """Return the moves from every variant of cells ``a`` to those of cells ``b``, (K, 4, 4)."""
@@ -309,7 +316,7 @@ class _StraightProblem(_Problem):
     def __init__(self, cells: CellVariants, first: FloatArray, last: FloatArray) -> None:
         super().__init__(np.empty((0, 4, 0, 4)), first, last, cells.inner_m)
         self.exit_xy, self.entry_xy = cells.exit_xy, cells.entry_xy
-        self.compiled = False  # its moves are computed as needed, in numpy
+        self._compile(self.move, self.exit_xy, self.entry_xy)  # straight moves as needed
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         gap = self.exit_xy[a][:, :, None, :] - self.entry_xy[b][:, None, :, :]

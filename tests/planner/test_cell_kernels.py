@@ -15,9 +15,11 @@ from planner import cell_kernels
 from planner.cell_order import (
     EXHAUSTIVE_MAX_CELLS,
     LOCAL_SEARCH_MAX_CELLS,
+    CellVariants,
     _neighbourhood,
     _permutations,
     _Problem,
+    _StraightProblem,
 )
 from planner.cell_plans import _scan_cells, plan_heading, scan_cells_numpy
 from planner.decomposition import (
@@ -164,6 +166,21 @@ def problems(seed: int, count: int) -> list[_Problem]:
     return out
 
 
+def straight_problems(seed: int, count: int) -> list[_Problem]:
+    """Ordering problems of straight moves computed as needed: 2 to 150 cells."""
+    rng = np.random.default_rng(seed)
+    out: list[_Problem] = []
+    for k in range(count):
+        m = int(rng.integers(2, 151))
+        entry, exit_ = (rng.uniform(0.0, 500.0, (m, 4, 2)) for _ in range(2))
+        if k % 3 == 0:
+            entry, exit_ = np.round(entry), np.round(exit_)
+        cells = CellVariants(entry, exit_, rng.uniform(0.0, 50.0, (m, 4)))
+        first, last = (rng.uniform(0.0, 50.0, (m, 4)) for _ in range(2))
+        out.append(_StraightProblem(cells, first, last))
+    return out
+
+
 def assert_same_searches(problem: _Problem, rng: np.random.Generator) -> None:
     m = len(problem.inner)
     if m <= EXHAUSTIVE_MAX_CELLS:
@@ -175,7 +192,7 @@ def assert_same_searches(problem: _Problem, rng: np.random.Generator) -> None:
     for order in orders[:5]:
         assert problem.search_variants(order) == problem.variants(order)
     assert np.array_equal(problem.search_greedy(), problem.greedy())
-    if m <= LOCAL_SEARCH_MAX_CELLS:
+    if m <= LOCAL_SEARCH_MAX_CELLS and not isinstance(problem, _StraightProblem):
         neighbourhood, changed, _ = _neighbourhood(m)
         candidates = orders[0][neighbourhood]
         fast = problem.search_costs(candidates)
@@ -185,7 +202,7 @@ def assert_same_searches(problem: _Problem, rng: np.random.Generator) -> None:
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_order_searches_compiled_equal_numpy(seed: int) -> None:
     rng = np.random.default_rng(300 + seed)
-    for problem in problems(seed, 60):
+    for problem in [*problems(seed, 60), *straight_problems(seed, 20)]:
         assert_same_searches(problem, rng)
 
 
