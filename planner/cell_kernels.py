@@ -691,6 +691,47 @@ def order_greedy(
     return _order_greedy(move, exits, entries, first, inner)
 
 
+@_jit
+def _tangent_pairs(
+    xy: FloatArray, around: FloatArray, i: IntArray, j: IntArray, collinear: float
+) -> BoolArray:
+    """``planner.routing.FieldRouter._tangent_pairs``: one pair at a time."""
+    out = np.empty(len(i), dtype=np.bool_)
+    for k in range(len(i)):
+        a, b = i[k], j[k]
+        dx = xy[0, b] - xy[0, a]
+        dy = xy[1, b] - xy[1, a]
+        tolerance = collinear * np.hypot(dx, dy)
+        if tolerance == 0.0:
+            out[k] = True
+            continue
+        wraps = True
+        for c in (a, b):
+            before = dx * around[1, c] - dy * around[0, c]
+            after = dx * around[3, c] - dy * around[2, c]
+            wraps = wraps and (
+                abs(before) < tolerance or abs(after) < tolerance or before * after > 0.0
+            )
+        out[k] = wraps
+    return out
+
+
+def tangent_pairs(
+    xy: FloatArray, around: FloatArray, i: IntArray, j: IntArray, collinear: float
+) -> BoolArray:
+    """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both, compiled.
+
+    ``xy`` (2, n) and ``around`` (4, n) as :class:`planner.routing.FieldRouter` keeps them.
+    """
+    return _tangent_pairs(
+        xy,
+        around,
+        np.ascontiguousarray(i, dtype=np.int64),
+        np.ascontiguousarray(j, dtype=np.int64),
+        collinear,
+    )
+
+
 def warm_up() -> None:
     """Compile the kernels, or load them from the disk cache, on a tiny field."""
     # An L: one cut through its inner corner, three cells at 135°.
@@ -711,3 +752,5 @@ def warm_up() -> None:
     order_costs(move, xy, xy, ends, ends, ends, np.array([[0, 1], [1, 0]]))
     order_variants(move, xy, xy, ends, ends, ends, np.array([0, 1]))
     order_greedy(move, xy, xy, ends, ends)
+    pair = np.array([0, 1])
+    tangent_pairs(np.ones((2, 2)), np.ones((4, 2)), pair, pair[::-1], 1e-9)

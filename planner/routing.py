@@ -384,7 +384,15 @@ class FieldRouter:
         """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both.
 
         A shortest path only passes a corner it wraps round, so other pairs need no edge.
+        Compiled (:func:`planner.cell_kernels.tangent_pairs`, the same arithmetic);
+        :meth:`_tangent_pairs_numpy` is the reference.
         """
+        from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+        return cell_kernels.tangent_pairs(self._xy, self._around, i, j, _COLLINEAR)
+
+    def _tangent_pairs_numpy(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
+        """:meth:`_tangent_pairs` in numpy."""
         x, y = self._xy
         dx, dy = x[j] - x[i], y[j] - y[i]
         # A neighbour within 1e-9 rad of the line counts as on it (sines, as distances).

@@ -31,6 +31,7 @@ from planner.decomposition import (
 )
 from planner.lines import to_sweep
 from planner.projection import field_frame
+from planner.routing import FieldRouter
 from tests.planner.random_fields import fields_with_holes, star_field
 from tests.planner.test_real_fields import real_fields
 
@@ -221,3 +222,23 @@ def test_order_searches_of_real_fields_compiled_equal_numpy() -> None:
             first = cells.inner_m + np.hypot(*(cells.entry_xy - start).transpose(2, 0, 1))
             problem = _Problem(move.reshape(m, 4, m, 4), first, np.zeros((m, 4)), cells.inner_m)
             assert_same_searches(problem, rng)
+
+
+@pytest.mark.parametrize("part", range(2))
+def test_tangent_pairs_compiled_equal_numpy(part: int) -> None:
+    rng = np.random.default_rng(400 + part)
+    fields = [f for f in local_real_fields() if f.interiors or len(f.exterior.coords) > 40]
+    teeth = [(x, 0.0 if i % 2 == 0 else 2.0) for i, x in enumerate(range(0, 62, 2))]
+    fields.append(Polygon([*teeth, (60, 0), (60, 30), (0, 30)]))  # collinear corners
+    for field in fields[part::2]:
+        router = FieldRouter(field)
+        router._corners()
+        n = len(router.nodes)
+        if n < 2:
+            continue
+        i, j = np.triu_indices(n, k=1)
+        if len(i) > 20_000:
+            pick = rng.choice(len(i), 20_000, replace=False)
+            i, j = i[pick], j[pick]
+        fast = router._tangent_pairs(i, j)
+        assert np.array_equal(fast, router._tangent_pairs_numpy(i, j))
