@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit, _left, _right
+from planner.kernels import _jit, _left, _mn, _mx, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -732,6 +732,62 @@ def tangent_pairs(
     )
 
 
+@_jit
+def _score_terms(
+    xy: FloatArray,
+    nxt: FloatArray,
+    cos_t: FloatArray,
+    sin_t: FloatArray,
+    d: float,
+    out: FloatArray,
+) -> None:
+    """``planner.heading_search._score_block``'s per-edge terms, before its sums.
+
+    ``out[0..4]`` (each (rows, n)) get each edge's working, missed, turn and piece terms
+    and its ``du``, every value by the numpy code's operations in its order.
+    """
+    rows, n = len(cos_t), len(xy)
+    half = d / 2.0
+    for r in range(rows):
+        c, s = cos_t[r], sin_t[r]
+        first = np.inf
+        for e in range(n):
+            u1 = xy[e, 0] * c - xy[e, 1] * s
+            first = _mn(first, u1) if e else u1
+        first = first + half
+        for e in range(n):
+            u1 = xy[e, 0] * c - xy[e, 1] * s
+            v1 = xy[e, 0] * s + xy[e, 1] * c
+            u2 = nxt[e, 0] * c - nxt[e, 1] * s
+            v2 = nxt[e, 0] * s + nxt[e, 1] * c
+            k1 = _mx(np.ceil((_mn(u1, u2) - first) / d), 0.0)
+            k2 = _mx(np.ceil((_mx(u1, u2) - first) / d), 0.0)
+            count = k2 - k1
+            du = u2 - u1
+            slope = 0.0 if du == 0.0 else (v2 - v1) / du
+            sum_k = (k1 + k2 - 1.0) * count / 2.0 * d
+            t = slope * (count * (first - u1) + sum_k)
+            sum_v = count * v1 + t
+            out[0, r, e] = -sum_v if du > 0.0 else sum_v
+            dv = abs(v2 - v1)
+            out[1, r, e] = _mn(count * abs(slope) * d * d / 8.0, dv * d / 2.0)
+            edge_m = np.hypot(du, dv)
+            out[2, r, e] = _mn(count * d * np.sqrt(1.0 + slope * slope), edge_m)
+            out[3, r, e] = count if du > 0.0 else 0.0
+            out[4, r, e] = du
+
+
+def score_terms(
+    xy: FloatArray, nxt: FloatArray, cos_t: FloatArray, sin_t: FloatArray, d: float, out: FloatArray
+) -> None:
+    """Fill ``out`` (at least (5, rows, n)) with the per-edge terms of a block of headings.
+
+    ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones; ``cos_t``, ``sin_t``
+    (rows,): the headings' (numpy's) cosines and sines. Compiled: see ``_score_terms``.
+    """
+    _score_terms(np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, d, out)
+
+
 def warm_up() -> None:
     """Compile the kernels, or load them from the disk cache, on a tiny field."""
     # An L: one cut through its inner corner, three cells at 135°.
@@ -753,4 +809,7 @@ def warm_up() -> None:
     order_variants(move, xy, xy, ends, ends, ends, np.array([0, 1]))
     order_greedy(move, xy, xy, ends, ends)
     pair = np.array([0, 1])
+    score_terms(
+        np.ones((2, 2)), np.zeros((2, 2)), np.ones(1), np.zeros(1), 1.0, np.empty((5, 1, 2))
+    )
     tangent_pairs(np.ones((2, 2)), np.ones((4, 2)), pair, pair[::-1], 1e-9)

@@ -29,6 +29,7 @@ from planner.decomposition import (
     decompose_sweep_numpy,
     sweep_rings,
 )
+from planner.heading_search import _SCRATCH_ARRAYS, _score_block, _score_block_numpy
 from planner.lines import to_sweep
 from planner.projection import field_frame
 from planner.routing import FieldRouter
@@ -242,3 +243,35 @@ def test_tangent_pairs_compiled_equal_numpy(part: int) -> None:
             i, j = i[pick], j[pick]
         fast = router._tangent_pairs(i, j)
         assert np.array_equal(fast, router._tangent_pairs_numpy(i, j))
+
+
+def assert_same_scores(parts: list[Polygon], headings_deg: FloatArray, d: float) -> None:
+    rings = [np.asarray(r.coords)[:-1] for p in parts for r in (p.exterior, *p.interiors)]
+    xy = np.concatenate(rings)
+    nxt = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    sizes = [len(r) for r in rings]
+    scratch = np.empty((_SCRATCH_ARRAYS, len(headings_deg), len(xy)))
+    fast = _score_block(xy, nxt, sizes, headings_deg, d, len(parts), scratch)
+    slow = _score_block_numpy(xy, nxt, sizes, headings_deg, d, len(parts), scratch.copy())
+    for name in ("working_m", "pieces", "turn_backs", "missed_m2", "turns_m"):
+        assert same_bits(getattr(fast, name), getattr(slow, name)), name
+
+
+@pytest.mark.parametrize("part", range(4))
+def test_heading_scores_of_real_fields_compiled_equal_numpy(part: int) -> None:
+    rng = np.random.default_rng(500 + part)
+    headings_deg = np.concatenate([np.arange(0.0, 180.0, 1.0), rng.uniform(0.0, 180.0, 40)])
+    for field in local_real_fields()[part::4]:
+        assert_same_scores([field], headings_deg, float(rng.choice([1.0, 2.5, 4.0, 7.3])))
+
+
+@SETTINGS
+@given(field=fields_with_holes(max_vertices=60), grid=st.sampled_from([None, 1.0, 5.0]))
+def test_heading_scores_of_random_fields_compiled_equal_numpy(
+    field: Polygon, grid: float | None
+) -> None:
+    if grid is not None:  # edges parallel to the lines at 0°, 45°, 90°, 135°
+        field = shapely.orient_polygons(shapely.set_precision(field, grid))
+        if not isinstance(field, Polygon) or field.is_empty or not field.is_valid:
+            return
+    assert_same_scores([field], np.arange(0.0, 180.0, 3.0), 4.0)
