@@ -653,6 +653,14 @@ def _order_greedy(
     return order
 
 
+def _writable(a: IntArray) -> IntArray:
+    """Return ``a`` as int64, C-contiguous and writable: the type the kernels are compiled for.
+
+    (A read-only array, such as the shared permutations, would compile another copy.)
+    """
+    return np.require(a, dtype=np.int64, requirements=["C", "W"])
+
+
 def order_costs(
     move: FloatArray,
     exits: FloatArray,
@@ -668,7 +676,7 @@ def order_costs(
     ``entries`` (m, 4, 2); ``first``, ``last`` and ``inner`` are (m, 4); all float64 and
     C-contiguous (:class:`planner.cell_order._Problem`).
     """
-    return _order_costs(move, exits, entries, first, last, inner, np.ascontiguousarray(orders))
+    return _order_costs(move, exits, entries, first, last, inner, _writable(orders))
 
 
 def order_variants(
@@ -681,7 +689,7 @@ def order_variants(
     order: IntArray,
 ) -> IntArray:
     """Choose the best variant of every cell of ``order``, compiled (:func:`order_costs`)."""
-    return _order_variants(move, exits, entries, first, last, inner, np.ascontiguousarray(order))
+    return _order_variants(move, exits, entries, first, last, inner, _writable(order))
 
 
 def order_greedy(
@@ -726,8 +734,8 @@ def tangent_pairs(
     return _tangent_pairs(
         xy,
         around,
-        np.ascontiguousarray(i, dtype=np.int64),
-        np.ascontiguousarray(j, dtype=np.int64),
+        _writable(i),
+        _writable(j),
         collinear,
     )
 
@@ -778,14 +786,20 @@ def _score_terms(
 
 
 def score_terms(
-    xy: FloatArray, nxt: FloatArray, cos_t: FloatArray, sin_t: FloatArray, d: float, out: FloatArray
+    xy: FloatArray,
+    nxt: FloatArray,
+    cos_t: FloatArray,
+    sin_t: FloatArray,
+    d: float,
+    scratch: FloatArray,
 ) -> None:
-    """Fill ``out`` (at least (5, rows, n)) with the per-edge terms of a block of headings.
+    """Write the per-edge terms of a block of headings into ``scratch[:5, :rows]``.
 
     ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones; ``cos_t``, ``sin_t``
-    (rows,): the headings' (numpy's) cosines and sines. Compiled: see ``_score_terms``.
+    (rows,): the headings' (numpy's) cosines and sines; ``scratch`` C-contiguous, at least
+    (5, rows, n). Compiled: see ``_score_terms``.
     """
-    _score_terms(np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, d, out)
+    _score_terms(np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, d, scratch)
 
 
 def warm_up() -> None:

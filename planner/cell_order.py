@@ -133,7 +133,10 @@ class _Problem:
         arrays = (move, exits, entries, self.first, self.last, self.inner)
         self.compiled = all(a.dtype == np.float64 for a in arrays)
         if self.compiled:
-            c = np.ascontiguousarray
+
+            def c(a: FloatArray) -> FloatArray:  # the one array type the kernels take
+                return np.require(a, requirements=["C", "W"])
+
             self._arrays = (
                 c(move),
                 c(exits),

@@ -161,10 +161,9 @@ def _score_block(
     from planner import cell_kernels  # numba: imported by the first plan that needs it
 
     rows = len(headings_deg)
-    terms = scratch[:5, :rows]
     theta = np.radians(headings_deg)
-    cell_kernels.score_terms(xy, nxt, np.cos(theta), np.sin(theta), d, terms)
-    working, missed, turns, pieces, du = terms
+    cell_kernels.score_terms(xy, nxt, np.cos(theta), np.sin(theta), d, scratch)
+    working, missed, turns, pieces, du = scratch[:5, :rows]
     return HeadingScores(
         working_m=working.sum(axis=1),
         pieces=pieces.sum(axis=1).astype(np.int64),
