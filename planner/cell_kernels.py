@@ -1,16 +1,21 @@
-"""Compiled loops for the cells of one heading, with the numpy code's arithmetic.
+"""Compiled loops for fields planned in cells, with the numpy code's arithmetic.
 
 A non-convex field is planned at about eight headings, and each is decomposed into cells
 (:func:`planner.decomposition.decompose_sweep`), its lines scanned
-(:func:`planner.lines.scan_cells`) and each cell split into its chains
-(:func:`planner.coverage.convex_chains`). The numpy code is vectorised over the cells, but a
-field has a few cells of a few dozen vertices, so its cost is the ~200 numpy calls per heading
-(a few µs apiece) and the per-cell calls. These kernels do the same computations in loops,
+(:func:`planner.lines.scan_cells`), each cell split into its chains
+(:func:`planner.coverage.convex_chains`) and the cells ordered
+(:mod:`planner.cell_order`); before that the headings are scored
+(:mod:`planner.heading_search`), and after it the moves between cells are routed round the
+corners that wrap them (:class:`planner.routing.FieldRouter`). The numpy code is vectorised,
+but a field has a few cells of a few dozen vertices, so its cost is the ~200 numpy calls per
+heading (a few µs apiece) and the per-cell calls. These kernels do the same computations in loops,
 compiled by numba: every value is computed by the same operations in the same order (the
 searches run on the same keys, ties sort as ``np.lexsort`` sorts them, the last of two writes
 to a line wins as in numpy's fancy assignment), so the cells, lines and chains, and so the
 plans, are the same to the last bit. The rotation into the sweep frame, the critical cuts
-(``np.unique``) and the cells' areas (``np.add.reduceat``'s pairwise sums) stay in numpy.
+(``np.unique``), the cells' areas and the heading scores' sums (numpy's pairwise sums) stay
+in numpy. Every kernel takes one array type (C-contiguous, writable), so :func:`warm_up`
+compiles all that the plans call.
 
 The numpy code stays the reference: ``tests/planner/test_cell_kernels.py`` compares the two
 bit for bit on random fields and the real ones. Like :mod:`planner.kernels`, the kernels are
