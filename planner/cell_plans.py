@@ -71,8 +71,39 @@ def plan_heading(
 
     ``parts`` may be prepared by :func:`planner.decomposition.sweep_rings` (many headings).
     """
+    return order_heading(cover_heading(parts, heading, d, edge_m), start_xy, finish_xy)
+
+
+@dataclass(frozen=True, slots=True)
+class CellCover:
+    """A heading's cells and lines and what they cover: :func:`plan_heading` before the order."""
+
+    heading_deg: float
+    cells: list[Cell]
+    scan: LineScan
+    line_count: int
+    covered_m2: float
+
+
+def cover_heading(
+    parts: Sequence[Polygon | SweepRings], heading: float, d: float, edge_m: float
+) -> CellCover:
+    """Decompose and scan the cells at one heading, and measure what their lines cover."""
     rings = [ring for part in parts for ring in decompose_sweep(part, heading)]
     scan, cells = _scan_cells(rings, d, edge_m)
+    covered = covered_cells(
+        [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
+    )
+    return CellCover(heading, cells, scan, len(scan.u), covered)
+
+
+def order_heading(
+    cover: CellCover,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> CellPlan:
+    """Order :func:`cover_heading`'s cells (their variants, straight moves): its cheap plan."""
+    scan, heading = cover.scan, cover.heading_deg
     aggregates = aggregate_scan(scan)
     lengths = combine_variants(aggregates, None, None)
     eu, ev, xu, xv = variant_ends(scan, aggregates)
@@ -82,10 +113,17 @@ def plan_heading(
     working = float(lengths.working.sum())
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + order_length(variants, order, start_xy, finish_xy, None)
-    covered = covered_cells(
-        [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
+    return CellPlan(
+        heading,
+        cover.cells,
+        scan,
+        variants,
+        working,
+        order,
+        length,
+        cover.line_count,
+        cover.covered_m2,
     )
-    return CellPlan(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
 
 
 def _scan_cells(
