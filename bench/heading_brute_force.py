@@ -19,6 +19,7 @@ import numpy as np
 from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK
 from planner.errors import PlannerError
+from tests.planner.plan_checks import fixed_heading_figures
 from tests.planner.random_fields import random_convex_jobs
 
 #: The 0.1° grid of fixed headings [deg].
@@ -39,17 +40,9 @@ def excess_pct(job: tuple, vehicle: str = "hand_tractor") -> tuple[float, float]
         searched = plan_coverage(field, **kwargs).stats
     except PlannerError:
         return None
-    lengths, covers = [], []
-    for heading in GRID_DEG.tolist():
-        try:
-            stats = plan_coverage(field, angle_deg=heading, **kwargs).stats
-        except PlannerError:
-            continue
-        lengths.append(stats.path_length_m)
-        covers.append(stats.coverage_ratio)
-    cover = np.asarray(covers)
+    lengths, cover = fixed_heading_figures(field, GRID_DEG.tolist(), **kwargs)
     eligible = cover >= cover.max() - COVERAGE_SLACK - 1e-9
-    best = float(np.asarray(lengths)[eligible].min())
+    best = float(lengths[eligible].min())
     shortfall_pp = max(float(cover.max()) - searched.coverage_ratio - COVERAGE_SLACK, 0.0) * 100
     return (searched.path_length_m / best - 1.0) * 100.0, shortfall_pp
 

@@ -288,7 +288,8 @@ def search_headings(
         by_coverage = np.where(affordable, coverage, -np.inf)
         tops = _spread(np.lexsort((headings, -by_coverage)), headings, affordable, COVERAGE_SEEDS)
         top_grid = np.round(headings[tops] / REFINE_STEP_DEG) * REFINE_STEP_DEG
-        centres = np.unique(np.concatenate([[headings[best]], top_grid, headings[picked]]))
+        # Repeats are harmless: the sweep round them is made unique below.
+        centres = np.concatenate([[headings[best]], top_grid, headings[picked]])
         pool = _Pool(headings, lengths, counts, coverage, tied)
         for round_ in range(REFINE_ROUNDS):
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.

@@ -5,12 +5,13 @@ rectangle ``[u - d/2, u + d/2] × [v_lo, v_hi]``. The covered area of a cell is 
 across the sweep, of the length of ``[lo(u), hi(u)] ∩ [v_lo, v_hi]``, where ``lo`` and ``hi``
 are the cell's lower and upper chains. Both chains are piecewise linear, so the integral is
 exact when cut at their vertices and where they cross the footprint's ends. This costs
-O(lines + vertices) in numpy, where intersecting 1,000 footprints with shapely costs ~25 ms.
+O(lines + vertices), where intersecting 1,000 footprints with shapely costs ~25 ms; the hot
+paths run as compiled loops (:mod:`planner.coverage_kernels`), this numpy code their reference.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -32,12 +33,17 @@ class Chains:
         Lower chain, ``u`` non-decreasing.
     hi_u, hi_v : ndarray
         Upper chain, ``u`` non-decreasing.
+    packed : ndarray or None
+        ``[len(lo_u), len(hi_u), *lo_u, *lo_v, *hi_u, *hi_v]``, whose views the four arrays
+        are, for the compiled loops (:mod:`planner.coverage_kernels`): set by
+        :func:`convex_chains` only (not an argument, so ``dataclasses.replace`` drops it).
     """
 
     lo_u: FloatArray
     lo_v: FloatArray
     hi_u: FloatArray
     hi_v: FloatArray
+    packed: FloatArray | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def u_min(self) -> float:
@@ -59,6 +65,20 @@ def convex_chains(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
     >>> c.lo_v.tolist(), c.hi_v.tolist()
     ([0.0, 0.0], [3.0, 3.0])
     """
+    from planner import coverage_kernels  # numba: imported by the first plan that needs it
+
+    fast = coverage_kernels.packed_chains(u_ring, v_ring)
+    if fast is None:
+        return convex_chains_numpy(u_ring, v_ring)
+    n_lo, n_hi, p = fast
+    lo, hi = 2 + n_lo, 2 + 2 * n_lo
+    chains = Chains(p[2:lo], p[lo:hi], p[hi : hi + n_hi], p[hi + n_hi :])
+    object.__setattr__(chains, "packed", p)  # frozen: set once, here
+    return chains
+
+
+def convex_chains_numpy(u_ring: FloatArray, v_ring: FloatArray) -> Chains:
+    """:func:`convex_chains` in numpy: the reference for the compiled loop."""
     # An edge parallel to the lines at either end belongs to neither chain: the lower chain
     # runs bottom-left to bottom-right, the upper one top-left to top-right.
     at_min = np.flatnonzero(u_ring <= u_ring.min() + _TIE_M)
@@ -341,6 +361,45 @@ def _laid_out(
     cell : ndarray of int, shape (pieces,)
         The cell of each piece.
     """
+    from planner import coverage_kernels  # numba: imported by the first plan that needs it
+
+    d = float(interval_m)
+    offsets = np.asarray(offsets)
+    fast = None
+    if len(offsets) == len(chains) + 1 and offsets[0] == 0 and offsets[-1] == len(u):
+        fast = coverage_kernels.laid_out(
+            np.concatenate([_packed(c) if c.packed is None else c.packed for c in chains]),
+            offsets,
+            u,
+            v_lo,
+            v_hi,
+            d,
+        )
+    if fast is None:
+        return _laid_out_numpy(chains, offsets, u, v_lo, v_hi, d)
+    odd, area, cell = fast
+    alone: dict[int, float] = {}
+    for c in odd.tolist():
+        k = slice(int(offsets[c]), int(offsets[c + 1]))
+        alone[c] = covered_area(chains[c], u[k], v_lo[k], v_hi[k], d)
+    return alone, area, cell
+
+
+def _packed(chains: Chains) -> FloatArray:
+    """``chains.packed`` for chains not made by :func:`convex_chains`' compiled loop."""
+    sizes = np.array([len(chains.lo_u), len(chains.hi_u)], dtype=np.float64)
+    return np.concatenate([sizes, chains.lo_u, chains.lo_v, chains.hi_u, chains.hi_v])
+
+
+def _laid_out_numpy(
+    chains: list[Chains],
+    offsets: IntArray,
+    u: FloatArray,
+    v_lo: FloatArray,
+    v_hi: FloatArray,
+    interval_m: float,
+) -> tuple[dict[int, float], FloatArray, IntArray]:
+    """:func:`_laid_out` in numpy: the reference for the compiled loop."""
     d = float(interval_m)
     half = d / 2.0
     cells = len(chains)

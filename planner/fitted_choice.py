@@ -132,7 +132,6 @@ def choose_convex(
     >>> picked.chosen.heading_deg, picked.coverage_given_up_pp <= 0.2
     (90.0, True)
     """
-    ring = np.asarray(field_local.exterior.coords)[:-1]
     area = float(field_local.area)
     machine: Polygon | None = None
 
@@ -313,7 +312,7 @@ def choose_convex(
             return FittedChoice(first, given_up)
     # The estimate was wrong here (a narrow field whose lines drop out when fitted): the
     # alternatives and every long edge's direction are planned in full.
-    edges = edge_headings(ring)
+    edges = edge_headings(np.asarray(field_local.exterior.coords)[:-1])
     edge_lengths, _ = lengths_of(edges)
     edge_variants = np.argmin(edge_lengths.total, axis=1)
     tried = [

@@ -162,12 +162,16 @@ def plan_line_turns(
     pairs = [len(u) - 1 if len(u) > 1 else 0 for u, _, _, _ in ordered]
     if sum(pairs) == 0:
         return [None] * len(ordered)
-    parts = []
+    # The six columns of TurnEnds, set by set (one set, the usual case: its slices as they are).
+    columns: list[list[FloatArray]] = [[], [], [], [], [], []]
     for u, a, b, _ in ordered:
         if len(u) > 1:
             yaw = np.where(b >= a, math.pi / 2.0, -math.pi / 2.0)
-            parts.append(np.stack([u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:]]))
-    x0, y0, yaw0, x1, y1, yaw1 = np.concatenate(parts, axis=1)
+            for column, values in zip(
+                columns, (u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:]), strict=True
+            ):
+                column.append(values)
+    x0, y0, yaw0, x1, y1, yaw1 = (c[0] if len(c) == 1 else np.concatenate(c) for c in columns)
     curves = vehicle_turns(TurnEnds(x0, y0, yaw0, x1, y1, yaw1), vehicle)
     out: list[TurnCurves | None] = []
     first = 0
@@ -306,10 +310,36 @@ def _fit_turns(
         curves = vehicle_turns(ends, vehicle)
     else:
         curves = planned
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    top = up[first]
+    fast = fit_kernels.fit_turns(
+        curves.xy,
+        curves.offsets,
+        top,
+        machine.lo_u,
+        machine.lo_v,
+        machine.hi_u,
+        machine.hi_v,
+        FIT_TOLERANCE_M,
+    )
+    if fast is None:
+        return _fitted_numpy(curves, top, machine)
+    shift, fits, xy = fast
+    fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
+    return fitted, shift, fits
+
+
+def _fitted_numpy(
+    curves: TurnCurves, top: BoolArray, machine: Chains
+) -> tuple[TurnCurves, FloatArray, BoolArray]:
+    """:func:`_fit_turns`' sliding of planned turns in numpy: the compiled kernel's reference.
+
+    ``top``: whether each turn is at the top (the upper chain's side).
+    """
     # Array methods and slices rather than np.repeat/np.diff/…: the wrappers cost more than
     # the work on a few turns.
-    owner = np.arange(len(first)).repeat(curves.offsets[1:] - curves.offsets[:-1])
-    top = up[first]
+    owner = np.arange(len(top)).repeat(curves.offsets[1:] - curves.offsets[:-1])
     pu, pv = curves.xy[:, 0], curves.xy[:, 1]
     hi = np.interp(pu, machine.hi_u, machine.hi_v)
     lo = np.interp(pu, machine.lo_u, machine.lo_v)
@@ -317,7 +347,7 @@ def _fit_turns(
     top_point = top[owner]
     need = np.where(top_point, pv - hi, lo - pv)
     need = np.where(beyond, np.inf, need)
-    delta = np.zeros(len(first))
+    delta = np.zeros(len(top))
     np.maximum.at(delta, owner, need)
     # A chain vertex between two points of a curve (a spike of the boundary) counts too.
     seg_turn, seg_need = _chain_vertices_under(pu, pv, owner, top, machine)
@@ -491,7 +521,9 @@ def fitting_loss_m2(
     """
     d = float(interval_m)
     n = np.asarray(line_counts, dtype=float)
-    last = np.clip(np.asarray(widths_m, dtype=float) - (n - 1.0) * d, 0.0, d)
+    # np.clip's bounds as np.maximum and np.minimum (its wrapper costs more than the work); a
+    # -0.0 it would make +0.0 adds the same below.
+    last = np.minimum(np.maximum(np.asarray(widths_m, dtype=float) - (n - 1.0) * d, 0.0), d)
     strips = np.maximum(n - 1.0, 0.0) * d + last
     # Turn ends: two per line but the first's and the last's one each.
     turn_ends = np.where(n >= 2.0, 2.0 * np.maximum(n - 2.0, 0.0) * d + d + last, 0.0)

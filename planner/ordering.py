@@ -173,8 +173,11 @@ def score_headings(
     from planner import kernels  # numba: imported by the first plan that needs it
 
     n, rows = kernels.length_aggregates(u_ring, v_ring, float(interval_m))
-    aggregates = HeadingAggregates(headings, n, *rows)
-    return combine_variants(aggregates, start_xy, finish_xy), n
+    # combine_variants compiled (planner.fit_kernels.combine_variants: the same numbers).
+    from planner import fit_kernels
+
+    turns, transit = fit_kernels.combine_variants(headings, n, rows[1:], start_xy, finish_xy)
+    return VariantLengths(working=rows[0], turns=turns, transit=transit), n
 
 
 def convex_aggregates(

@@ -197,7 +197,7 @@ def plan_coverage(
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
         sweep = sweep_of(headings)
-        widths = np.ptp(sweep[0], axis=1)
+        widths = sweep[0].max(axis=1) - sweep[0].min(axis=1)  # np.ptp, without its wrapper
         loss = fitting_loss_m2(machine, interval, line_counts(widths, interval), widths) / field_m2
         return convex_coverage(ring_xy, headings, interval, sweep) - loss
 
@@ -344,19 +344,13 @@ def _assemble(
     waypoints = Waypoints(lon_list, lat_list, route.roles, route.lines)
     step = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # np.diff, without its wrapper's cost
     distance = np.concatenate(([0.0], np.cumsum(step)))
-    # Length per kind of segment: each segment runs from its first waypoint to its last.
-    kind_codes = {kind: k for k, kind in enumerate(_LENGTH_KINDS)}
-    bounds = np.array(
-        [(kind_codes.get(kind, -1), first, last) for kind, _, first, last in route.segments],
-        dtype=np.int64,
-    ).reshape(-1, 3)
-    counted = bounds[bounds[:, 0] >= 0]
-    per_kind = np.bincount(
-        counted[:, 0],
-        distance[counted[:, 2]] - distance[counted[:, 1]],
-        minlength=len(_LENGTH_KINDS),
-    )
-    lengths = {kind: float(per_kind[k]) for kind, k in kind_codes.items()}
+    # Length per kind of segment: each segment runs from its first waypoint to its last,
+    # added in the segments' order (as np.bincount would; plain floats: a few segments).
+    at = distance.tolist()
+    lengths = dict.fromkeys(_LENGTH_KINDS, 0.0)
+    for kind, _, first, last in route.segments:
+        if kind in lengths:
+            lengths[kind] += at[last] - at[first]
     segments = PathSegments(lon_list, lat_list, route.segments)
     path_length = float(distance[-1])
     estimated_time = driving_time_s(x, y, speed_mps=speed_mps, turn_rate_dps=vehicle.turn_rate_dps)

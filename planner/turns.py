@@ -251,6 +251,9 @@ def dubins_words(
 ) -> tuple[IntArray, FloatArray]:
     """Find the shortest Dubins word of every turn: segment signs and normalised lengths.
 
+    Compiled (:func:`planner.fit_kernels.dubins_words`); :func:`_dubins_words_numpy` is the
+    reference it equals bit for bit.
+
     Returns
     -------
     signs : ndarray of int, shape (T, 3)
@@ -258,6 +261,29 @@ def dubins_words(
     params : ndarray, shape (T, 3)
         Segment lengths divided by ``radius_m`` (arc angles [rad] for arcs).
     """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    unknown = [w for w in words if w not in DUBINS_WORDS]
+    if unknown:
+        raise ValueError(f"unknown Dubins word {unknown[0]!r}")
+    codes = np.array([_WORD_INDEX[w] for w in words], dtype=np.int64)
+    best, params = fit_kernels.dubins_words(
+        ends.x0, ends.y0, ends.yaw0, ends.x1, ends.y1, ends.yaw1, radius_m, codes
+    )
+    if len(best) and best.min() < 0:
+        raise ValueError("no Dubins word joins these poses")  # only if ``words`` is narrowed
+    return _WORD_SIGNS[codes[best]], params
+
+
+#: Each Dubins word's index in :data:`DUBINS_WORDS`, and the signs of its three segments.
+_WORD_INDEX = {word: k for k, word in enumerate(DUBINS_WORDS)}
+_WORD_SIGNS = np.array(list(DUBINS_WORDS.values()), dtype=np.int64)
+
+
+def _dubins_words_numpy(
+    ends: TurnEnds, *, radius_m: float, words: tuple[str, ...] = tuple(DUBINS_WORDS)
+) -> tuple[IntArray, FloatArray]:
+    """:func:`dubins_words` in numpy, all turns at once: the compiled kernel's reference."""
     dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
     d = np.hypot(dx, dy) / radius_m
     theta = np.arctan2(dy, dx)
@@ -332,7 +358,26 @@ def _mod2pi(angle: FloatArray) -> FloatArray:
 def _sample(
     ends: TurnEnds, signs: IntArray, lengths: FloatArray, radius_m: float, step_m: float
 ) -> TurnCurves:
-    """Integrate and sample segments (sign: arc direction; signed length: backwards < 0)."""
+    """Integrate and sample segments (sign: arc direction; signed length: backwards < 0).
+
+    The points come from :func:`planner.fit_kernels.sample_turns`, which equals
+    :func:`_sample_numpy` bit for bit.
+    """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    arc_step = min(step_m, 2.0 * radius_m * math.acos(max(-1.0, 1.0 - SAGITTA_M / radius_m)))
+    xy, offsets = fit_kernels.sample_turns(
+        ends.x0, ends.y0, ends.yaw0, ends.x1, ends.y1, signs, lengths, radius_m, arc_step, step_m
+    )
+    size = np.abs(lengths)
+    turning = np.where(signs != 0, size / radius_m, 0.0).sum(axis=1)
+    return TurnCurves(xy, offsets, size.sum(axis=1), turning, float(radius_m))
+
+
+def _sample_numpy(
+    ends: TurnEnds, signs: IntArray, lengths: FloatArray, radius_m: float, step_m: float
+) -> TurnCurves:
+    """:func:`_sample` in numpy, all turns at once: the compiled kernel's reference."""
     n, m = signs.shape
     arc_step = min(step_m, 2.0 * radius_m * math.acos(max(-1.0, 1.0 - SAGITTA_M / radius_m)))
     seg_step = np.where(signs != 0, arc_step, step_m)
@@ -406,6 +451,21 @@ def driving_time_s(
     ...                      speed_mps=0.56, turn_rate_dps=45.0), 2)   # two right angles
     46.86
     """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    # Compiled: the steps and corners as _driving_time_numpy finds them, summed here.
+    per_step, corner = fit_kernels.driving_times(
+        x, y, speed_mps, math.radians(turn_rate_dps), STEP_M + 1e-9
+    )
+    if len(per_step) == 0:
+        return 0.0
+    return float(per_step.sum()) + float(corner.sum()) / math.radians(turn_rate_dps)
+
+
+def _driving_time_numpy(
+    x: FloatArray, y: FloatArray, *, speed_mps: float, turn_rate_dps: float
+) -> float:
+    """:func:`driving_time_s` in numpy: the compiled kernel's reference."""
     dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]  # np.diff, without its wrapper's cost
     step = np.hypot(dx, dy)
     moving = step > 1e-9
@@ -456,6 +516,11 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     once, from the origin, and translated to its turns.
     """
     n = len(ends)
+    if n < _SHAPES_FROM:  # every turn its own shape
+        zero = np.zeros(n)
+        dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
+        shapes = _vehicle_turns(TurnEnds(zero, zero, ends.yaw0, dx, dy, ends.yaw1), vehicle, step_m)
+        return _translate(shapes, None, ends)
     relative = np.stack([ends.x1 - ends.x0, ends.y1 - ends.y0, ends.yaw0, ends.yaw1])
     # Every shape is planned from the origin, then moved onto its ends, and turns share a
     # shape only if their relative ends are the same to the last bit: so a turn's shape
@@ -464,30 +529,41 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     # either way with the last bit: shared to 1e-9, a field fitted at many headings at once
     # pulled some line ends back 0.2 m further than fitted alone. Rounded to 1e-9 instead, a
     # straight move bent into a 37 m Dubins loop.)
-    shape_of = np.arange(n)
-    first = shape_of
-    if n >= _SHAPES_FROM:
-        # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
-        order = np.lexsort(relative[::-1])
-        fresh = np.ones(n, dtype=bool)
-        fresh[1:] = (np.diff(relative[:, order], axis=1) != 0.0).any(axis=0)
-        first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
-        shape_of = np.empty(n, dtype=np.int64)
-        shape_of[order] = np.cumsum(fresh) - 1
+    # Distinct rows by one stable lexsort (np.unique on rows is many times slower).
+    order = np.lexsort(relative[::-1])
+    fresh = np.ones(n, dtype=bool)
+    fresh[1:] = (np.diff(relative[:, order], axis=1) != 0.0).any(axis=0)
+    first = order[fresh]  # each shape's first turn: lexsort keeps equal keys in order
+    shape_of = np.empty(n, dtype=np.int64)
+    shape_of[order] = np.cumsum(fresh) - 1
     dx, dy, yaw0, yaw1 = relative[:, first]
     zero = np.zeros(len(first))
     shapes = _vehicle_turns(TurnEnds(zero, zero, yaw0, dx, dy, yaw1), vehicle, step_m)
     return _translate(shapes, shape_of, ends)
 
 
-def _translate(shapes: TurnCurves, shape_of: IntArray, ends: TurnEnds) -> TurnCurves:
-    """Turn ``k`` is ``shapes``' turn ``shape_of[k]`` moved to start at its own start."""
-    curves = take_turns(shapes, shape_of)
-    owner = np.repeat(np.arange(len(shape_of)), np.diff(curves.offsets))
+def _translate(shapes: TurnCurves, shape_of: IntArray | None, ends: TurnEnds) -> TurnCurves:
+    """Turn ``k`` is ``shapes``' turn ``shape_of[k]`` moved to start at its own start.
+
+    ``shape_of`` None: turn ``k`` is shape ``k``, and ``shapes`` (the caller's own) is moved
+    in place.
+    """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    curves = shapes if shape_of is None else take_turns(shapes, shape_of)
+    # Each curve moved by its start, and starting and ending exactly on its own line ends
+    # (compiled: _translate_numpy is the reference).
+    fit_kernels.translate_turns(curves.xy, curves.offsets, ends.x0, ends.y0, ends.x1, ends.y1)
+    return curves
+
+
+def _translate_numpy(shapes: TurnCurves, shape_of: IntArray | None, ends: TurnEnds) -> TurnCurves:
+    """:func:`_translate` in numpy: the compiled kernel's reference."""
+    curves = shapes if shape_of is None else take_turns(shapes, shape_of)
+    owner = np.arange(len(curves)).repeat(curves.offsets[1:] - curves.offsets[:-1])
     xy = curves.xy
     xy[:, 0] += ends.x0[owner]
     xy[:, 1] += ends.y0[owner]
-    # Each curve starts and ends exactly on its own line ends.
     xy[curves.offsets[:-1], 0], xy[curves.offsets[:-1], 1] = ends.x0, ends.y0
     xy[curves.offsets[1:] - 1, 0], xy[curves.offsets[1:] - 1, 1] = ends.x1, ends.y1
     return curves

@@ -17,6 +17,18 @@ PAPER_FIELD = ROOT / "tests" / "data" / "paper_ketewel.geojson"
 BALI = (115.298, -8.6265)
 
 
+def plan_paper_field(**options: object) -> CoveragePlan:
+    """The paper's scenario planned for real: Ketewel field, 4 m, its start and finish."""
+    spec = parse_field_geojson(json.loads(PAPER_FIELD.read_text(encoding="utf-8")))
+    return plan_coverage(
+        spec.field_lonlat,
+        interval_m=4.0,
+        start_lonlat=spec.start_lonlat,
+        finish_lonlat=spec.finish_lonlat,
+        **options,  # type: ignore[arg-type]
+    )
+
+
 def hand_plan(
     points_m: list[tuple[float, float]],
     roles: list[str],
@@ -78,14 +90,7 @@ def paper_plan() -> CoveragePlan:
     The paper's plan has 4 lines along the rows (1°); the searched heading puts coverage
     first (R5) and may add a fifth line beside the last.
     """
-    spec = parse_field_geojson(json.loads(PAPER_FIELD.read_text(encoding="utf-8")))
-    return plan_coverage(
-        spec.field_lonlat,
-        interval_m=4.0,
-        start_lonlat=spec.start_lonlat,
-        finish_lonlat=spec.finish_lonlat,
-        angle_deg=1.0,
-    )
+    return plan_paper_field(angle_deg=1.0)
 
 
 @pytest.fixture(scope="session")
@@ -119,11 +124,4 @@ def make_plan():  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="session")
 def paper_spiral() -> CoveragePlan:
     """The paper's field at 4 m as a spiral: two rounds, a corner loop at each right angle."""
-    spec = parse_field_geojson(json.loads(PAPER_FIELD.read_text(encoding="utf-8")))
-    return plan_coverage(
-        spec.field_lonlat,
-        interval_m=4.0,
-        start_lonlat=spec.start_lonlat,
-        finish_lonlat=spec.finish_lonlat,
-        pattern="spiral",
-    )
+    return plan_paper_field(pattern="spiral")

@@ -11,6 +11,7 @@ from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK, candidate_headings
 from planner.errors import PlannerError
 from planner.projection import field_frame
+from tests.planner.plan_checks import fixed_heading_figures
 from tests.planner.random_fields import random_convex_jobs
 from tests.planner.test_real_fields import real_fields
 
@@ -65,17 +66,11 @@ def test_searched_plan_within_five_hundredths_of_a_percent_of_a_tenth_degree_bru
     field, interval, start, finish = random_convex_jobs(field_k + 1)[field_k]
     kwargs = {"interval_m": interval, "start_lonlat": start, "finish_lonlat": finish}
     searched = plan_coverage(field, **kwargs).stats
-    lengths, covers = [], []
-    for heading in np.round(np.arange(0.0, 180.0, 0.1), 1).tolist():
-        try:
-            stats = plan_coverage(field, angle_deg=heading, **kwargs).stats
-        except PlannerError:
-            continue
-        lengths.append(stats.path_length_m)
-        covers.append(stats.coverage_ratio)
-    cover = np.asarray(covers)
+    lengths, cover = fixed_heading_figures(
+        field, np.round(np.arange(0.0, 180.0, 0.1), 1).tolist(), **kwargs
+    )
     keeps_rule = cover >= cover.max() - COVERAGE_SLACK - _ROUNDING
-    shortest = float(np.asarray(lengths)[keeps_rule].min())
+    shortest = float(lengths[keeps_rule].min())
     assert searched.coverage_ratio >= cover.max() - COVERAGE_SLACK - _ROUNDING
     assert searched.path_length_m <= shortest * 1.0005, (
         f"searched {searched.angle_deg}° {searched.path_length_m:.1f} m, "
