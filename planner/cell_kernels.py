@@ -2,8 +2,7 @@
 
 A non-convex field is planned at about eight headings, and each is decomposed into cells
 (:func:`planner.decomposition.decompose_sweep`), its lines scanned
-(:func:`planner.lines.scan_cells`), each cell split into its chains
-(:func:`planner.coverage.convex_chains`) and the cells ordered
+(:func:`planner.lines.scan_cells`) and the cells ordered
 (:mod:`planner.cell_order`); before that the headings are scored
 (:mod:`planner.heading_search`), and after it the moves between cells are routed round the
 corners that wrap them (:class:`planner.routing.FieldRouter`). The numpy code is vectorised,
@@ -11,7 +10,7 @@ but a field has a few cells of a few dozen vertices, so its cost is the ~200 num
 heading (a few µs apiece) and the per-cell calls. These kernels do the same computations in loops,
 compiled by numba: every value is computed by the same operations in the same order (the
 searches run on the same keys, ties sort as ``np.lexsort`` sorts them, the last of two writes
-to a line wins as in numpy's fancy assignment), so the cells, lines and chains, and so the
+to a line wins as in numpy's fancy assignment), so the cells, lines and orders, and so the
 plans, are the same to the last bit. The rotation into the sweep frame, the critical cuts
 (``np.unique``), the cells' areas and the heading scores' sums (numpy's pairwise sums) stay
 in numpy. Every kernel takes one array type (C-contiguous, writable), so :func:`warm_up`
@@ -35,7 +34,6 @@ BoolArray = npt.NDArray[np.bool_]
 
 _SNAP_M = 1e-6  # planner.decomposition._SNAP_M
 _REPEAT_M = 1e-9  # planner.decomposition._drop_repeats
-_TIE_M = 1e-9  # planner.coverage._TIE_M
 _COUNT_EPS = 1e-9  # planner.lines._COUNT_EPS
 
 
@@ -437,84 +435,6 @@ def scan_rings(
 
 
 @_jit
-def _chains(
-    u: FloatArray, v: FloatArray, starts: IntArray, sizes: IntArray
-) -> tuple[FloatArray, FloatArray, IntArray, FloatArray, FloatArray, IntArray]:
-    """:func:`planner.coverage.convex_chains` of every ring, laid end to end."""
-    m = len(sizes)
-    total = int(sizes.sum()) + 2 * m
-    lo_u = np.empty(total)
-    lo_v = np.empty(total)
-    hi_u = np.empty(total)
-    hi_v = np.empty(total)
-    lo_at = np.zeros(m + 1, dtype=np.int64)
-    hi_at = np.zeros(m + 1, dtype=np.int64)
-    for c in range(m):
-        s, size = starts[c], sizes[c]
-        u_min = u[s]
-        u_max = u[s]
-        for i in range(s + 1, s + size):
-            if u[i] < u_min:
-                u_min = u[i]
-            if u[i] > u_max:
-                u_max = u[i]
-        at_min = u_min + _TIE_M
-        at_max = u_max - _TIE_M
-        # First of the smallest / largest v among the vertices at either end (np.argmin).
-        lo_start = -1
-        hi_end = -1
-        lo_end = -1
-        hi_start = -1
-        for i in range(size):
-            x, y = u[s + i], v[s + i]
-            if x <= at_min:
-                if lo_start < 0 or y < v[s + lo_start]:
-                    lo_start = i
-                if hi_end < 0 or y > v[s + hi_end]:
-                    hi_end = i
-            if x >= at_max:
-                if lo_end < 0 or y < v[s + lo_end]:
-                    lo_end = i
-                if hi_start < 0 or y > v[s + hi_start]:
-                    hi_start = i
-        w = lo_at[c]
-        count = (lo_end - lo_start) % size + 1
-        top = -np.inf
-        for j in range(count):
-            i = s + (lo_start + j) % size
-            top = u[i] if (j == 0 or u[i] > top) else top
-            lo_u[w + j] = top
-            lo_v[w + j] = v[i]
-        lo_at[c + 1] = w + count
-        w = hi_at[c]
-        count = (hi_end - hi_start) % size + 1
-        top = -np.inf
-        for j in range(count):
-            i = s + (hi_end - j) % size
-            top = u[i] if (j == 0 or u[i] > top) else top
-            hi_u[w + j] = top
-            hi_v[w + j] = v[i]
-        hi_at[c + 1] = w + count
-    return lo_u, lo_v, lo_at, hi_u, hi_v, hi_at
-
-
-def ring_chains(
-    u: FloatArray, v: FloatArray, sizes: IntArray
-) -> tuple[FloatArray, FloatArray, IntArray, FloatArray, FloatArray, IntArray]:
-    """:func:`planner.coverage.convex_chains` of rings laid end to end, compiled.
-
-    Returns
-    -------
-    lo_u, lo_v, lo_at, hi_u, hi_v, hi_at : ndarray
-        Cell ``c``'s lower chain is ``lo_u[lo_at[c]:lo_at[c + 1]]`` (and ``lo_v``), its
-        upper one likewise.
-    """
-    starts = np.zeros(len(sizes), dtype=np.int64)
-    np.cumsum(sizes[:-1], out=starts[1:])
-    return _chains(u, v, starts, sizes)
-
-
-@_jit
 def _move(
     move: FloatArray, exits: FloatArray, entries: FloatArray, a: int, i: int, b: int, j: int
 ) -> float:
@@ -820,7 +740,6 @@ def warm_up() -> None:
     v = np.concatenate([r[1] for r in rings])
     sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
     scan_rings(u, v, sizes, 4.0, 2.0)
-    ring_chains(u, v, sizes)
     move = np.ones((2, 4, 2, 4))
     xy = np.zeros((2, 4, 2))
     ends = np.zeros((2, 4))

@@ -16,7 +16,7 @@ import numpy.typing as npt
 from shapely import Polygon
 
 from planner.cell_order import CellVariants, order_cells
-from planner.coverage import Chains, convex_chains, covered_cells
+from planner.coverage import Chains, convex_chains, convex_chains_numpy, covered_cells
 from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import aggregate_scan, combine_variants, variant_ends
@@ -129,7 +129,7 @@ def order_heading(
 def _scan_cells(
     rings: list[tuple[FloatArray, FloatArray]], d: float, edge_m: float
 ) -> tuple[LineScan, list[Cell]]:
-    """Scan the lines of ``rings`` and split each into its chains, compiled.
+    """Scan the lines of ``rings`` (compiled) and split each into its chains.
 
     :func:`scan_cells_numpy` is the reference (``tests/planner/test_cell_kernels.py``).
     """
@@ -142,20 +142,9 @@ def _scan_cells(
     sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
     offsets, line_u, v_lo, v_hi = cell_kernels.scan_rings(u, v, sizes, d, edge_m)
     scan = LineScan(np.zeros(len(rings)), offsets, line_u, v_lo, v_hi)
-    lo_u, lo_v, lo_at, hi_u, hi_v, hi_at = cell_kernels.ring_chains(u, v, sizes)
-    lo, hi, lines = lo_at.tolist(), hi_at.tolist(), offsets.tolist()
+    lines = offsets.tolist()
     cells = [
-        Cell(
-            u_ring,
-            v_ring,
-            Chains(
-                lo_u[lo[c] : lo[c + 1]],
-                lo_v[lo[c] : lo[c + 1]],
-                hi_u[hi[c] : hi[c + 1]],
-                hi_v[hi[c] : hi[c + 1]],
-            ),
-            slice(lines[c], lines[c + 1]),
-        )
+        Cell(u_ring, v_ring, convex_chains(u_ring, v_ring), slice(lines[c], lines[c + 1]))
         for c, (u_ring, v_ring) in enumerate(rings)
     ]
     return scan, cells
@@ -170,7 +159,7 @@ def scan_cells_numpy(
         Cell(
             u_ring,
             v_ring,
-            convex_chains(u_ring, v_ring),
+            convex_chains_numpy(u_ring, v_ring),
             slice(scan.offsets[c], scan.offsets[c + 1]),
         )
         for c, (u_ring, v_ring) in enumerate(rings)
