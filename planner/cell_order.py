@@ -108,14 +108,14 @@ def order_cells(
 
     if m <= EXHAUSTIVE_MAX_CELLS:
         orders = _permutations(m)
-        costs = np.round(problem.costs(orders), 9)
-        return problem.variants(orders[int(np.argmin(costs))])
-    candidates = np.stack([problem.greedy(), np.arange(m)])  # nearest next; sweep order
-    costs = np.round(problem.costs(candidates), 9)
+        costs = np.round(problem.search_costs(orders), 9)
+        return problem.search_variants(orders[int(np.argmin(costs))])
+    candidates = np.stack([problem.search_greedy(), np.arange(m)])  # nearest next; sweep order
+    costs = np.round(problem.search_costs(candidates), 9)
     order = candidates[int(np.argmin(costs))]
     if improve and m <= LOCAL_SEARCH_MAX_CELLS:
         order = problem.improve(order)
-    return problem.variants(order)
+    return problem.search_variants(order)
 
 
 class _Problem:
@@ -125,6 +125,52 @@ class _Problem:
         self, move: FloatArray, first: FloatArray, last: FloatArray, inner: FloatArray
     ) -> None:
         self.move, self.first, self.last, self.inner = move, first, last, inner
+        self._compile(move, np.empty((0, 4, 2)), np.empty((0, 4, 2)))
+
+    def _compile(self, move: FloatArray, exits: FloatArray, entries: FloatArray) -> None:
+        # The searches run compiled (planner.cell_kernels, the same figures) on float64 costs;
+        # the methods below stay the numpy reference.
+        arrays = (move, exits, entries, self.first, self.last, self.inner)
+        self.compiled = all(a.dtype == np.float64 for a in arrays)
+        if self.compiled:
+
+            def c(a: FloatArray) -> FloatArray:  # the one array type the kernels take
+                return np.require(a, requirements=["C", "W"])
+
+            self._arrays = (
+                c(move),
+                c(exits),
+                c(entries),
+                c(self.first),
+                c(self.last),
+                c(self.inner),
+            )
+
+    def search_costs(self, orders: IntArray) -> FloatArray:
+        """:meth:`costs`, compiled where it can be."""
+        if not self.compiled:
+            return self.costs(orders)
+        from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+        return cell_kernels.order_costs(*self._arrays, orders)
+
+    def search_variants(self, order: IntArray) -> list[tuple[int, int]]:
+        """:meth:`variants`, compiled where it can be."""
+        if not self.compiled:
+            return self.variants(order)
+        from planner import cell_kernels
+
+        chosen = cell_kernels.order_variants(*self._arrays, order)
+        return list(zip(order.tolist(), chosen.tolist(), strict=True))
+
+    def search_greedy(self) -> IntArray:
+        """:meth:`greedy`, compiled where it can be."""
+        if not self.compiled:
+            return self.greedy()
+        from planner import cell_kernels
+
+        move, exits, entries, first, _, inner = self._arrays
+        return cell_kernels.order_greedy(move, exits, entries, first, inner)
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         """Return the moves from every variant of cells ``a`` to those of cells ``b``, (K, 4, 4)."""
@@ -177,10 +223,13 @@ class _Problem:
     def improve(self, order: IntArray) -> IntArray:
         """Best 2-opt reversal or single-cell move, repeatedly, while it shortens the route."""
         neighbourhood, changed, rank = _neighbourhood(len(order))
-        best = float(self.costs(order[None])[0])
+        best = float(self.search_costs(order[None])[0])
         for _ in range(_MAX_ROUNDS):
             candidates = order[neighbourhood]
-            costs = self.costs_from(order, candidates, changed)
+            if self.compiled:  # every candidate in full: the figures of costs_from
+                costs = self.search_costs(candidates)
+            else:
+                costs = self.costs_from(order, candidates, changed)
             # The first of equals in the search's own order (``rank``), as before.
             ties = np.flatnonzero(costs == costs.min())
             k = int(ties[np.argmin(rank[ties])])
@@ -270,6 +319,7 @@ class _StraightProblem(_Problem):
     def __init__(self, cells: CellVariants, first: FloatArray, last: FloatArray) -> None:
         super().__init__(np.empty((0, 4, 0, 4)), first, last, cells.inner_m)
         self.exit_xy, self.entry_xy = cells.exit_xy, cells.entry_xy
+        self._compile(self.move, self.exit_xy, self.entry_xy)  # straight moves as needed
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         gap = self.exit_xy[a][:, :, None, :] - self.entry_xy[b][:, None, :, :]

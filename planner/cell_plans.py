@@ -16,7 +16,7 @@ import numpy.typing as npt
 from shapely import Polygon
 
 from planner.cell_order import CellVariants, order_cells
-from planner.coverage import Chains, convex_chains, covered_cells
+from planner.coverage import Chains, convex_chains, convex_chains_numpy, covered_cells
 from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import aggregate_scan, combine_variants, variant_ends
@@ -71,17 +71,39 @@ def plan_heading(
 
     ``parts`` may be prepared by :func:`planner.decomposition.sweep_rings` (many headings).
     """
+    return order_heading(cover_heading(parts, heading, d, edge_m), start_xy, finish_xy)
+
+
+@dataclass(frozen=True, slots=True)
+class CellCover:
+    """A heading's cells and lines and what they cover: :func:`plan_heading` before the order."""
+
+    heading_deg: float
+    cells: list[Cell]
+    scan: LineScan
+    line_count: int
+    covered_m2: float
+
+
+def cover_heading(
+    parts: Sequence[Polygon | SweepRings], heading: float, d: float, edge_m: float
+) -> CellCover:
+    """Decompose and scan the cells at one heading, and measure what their lines cover."""
     rings = [ring for part in parts for ring in decompose_sweep(part, heading)]
-    scan = scan_cells(rings, d, edge_m=edge_m)
-    cells = [
-        Cell(
-            u_ring,
-            v_ring,
-            convex_chains(u_ring, v_ring),
-            slice(scan.offsets[c], scan.offsets[c + 1]),
-        )
-        for c, (u_ring, v_ring) in enumerate(rings)
-    ]
+    scan, cells = _scan_cells(rings, d, edge_m)
+    covered = covered_cells(
+        [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
+    )
+    return CellCover(heading, cells, scan, len(scan.u), covered)
+
+
+def order_heading(
+    cover: CellCover,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> CellPlan:
+    """Order :func:`cover_heading`'s cells (their variants, straight moves): its cheap plan."""
+    scan, heading = cover.scan, cover.heading_deg
     aggregates = aggregate_scan(scan)
     lengths = combine_variants(aggregates, None, None)
     eu, ev, xu, xv = variant_ends(scan, aggregates)
@@ -91,10 +113,58 @@ def plan_heading(
     working = float(lengths.working.sum())
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + order_length(variants, order, start_xy, finish_xy, None)
-    covered = covered_cells(
-        [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
+    return CellPlan(
+        heading,
+        cover.cells,
+        scan,
+        variants,
+        working,
+        order,
+        length,
+        cover.line_count,
+        cover.covered_m2,
     )
-    return CellPlan(heading, cells, scan, variants, working, order, length, len(scan.u), covered)
+
+
+def _scan_cells(
+    rings: list[tuple[FloatArray, FloatArray]], d: float, edge_m: float
+) -> tuple[LineScan, list[Cell]]:
+    """Scan the lines of ``rings`` (compiled) and split each into its chains.
+
+    :func:`scan_cells_numpy` is the reference (``tests/planner/test_cell_kernels.py``).
+    """
+    if not rings:
+        return scan_cells_numpy(rings, d, edge_m)
+    from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+    u = np.concatenate([r[0] for r in rings])
+    v = np.concatenate([r[1] for r in rings])
+    sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
+    offsets, line_u, v_lo, v_hi = cell_kernels.scan_rings(u, v, sizes, d, edge_m)
+    scan = LineScan(np.zeros(len(rings)), offsets, line_u, v_lo, v_hi)
+    lines = offsets.tolist()
+    cells = [
+        Cell(u_ring, v_ring, convex_chains(u_ring, v_ring), slice(lines[c], lines[c + 1]))
+        for c, (u_ring, v_ring) in enumerate(rings)
+    ]
+    return scan, cells
+
+
+def scan_cells_numpy(
+    rings: list[tuple[FloatArray, FloatArray]], d: float, edge_m: float
+) -> tuple[LineScan, list[Cell]]:
+    """:func:`_scan_cells` in numpy: the reference for its compiled loops."""
+    scan = scan_cells(rings, d, edge_m=edge_m)
+    cells = [
+        Cell(
+            u_ring,
+            v_ring,
+            convex_chains_numpy(u_ring, v_ring),
+            slice(scan.offsets[c], scan.offsets[c + 1]),
+        )
+        for c, (u_ring, v_ring) in enumerate(rings)
+    ]
+    return scan, cells
 
 
 def reach_headland(plan: CellPlan, d: float) -> CellPlan:

@@ -144,6 +144,29 @@ def decompose_sweep(
     cuts = _cuts(u[turn])
     if len(cuts) <= 2:
         return [(u[: r.sizes[0]].copy(), v[: r.sizes[0]].copy())]
+    from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+    status, cell_u, cell_v, cell_sizes = cell_kernels.sweep_cells(
+        u, v, turn, cuts, r.sizes, r.first, r.ring_of, r.local, r.nxt, r.prv
+    )
+    if status == 1:
+        return _rings(cell_u, cell_v, cell_sizes)
+    if status == 0:
+        return _decompose_clipped(r.field, heading_deg)
+    return decompose_sweep_numpy(r, heading_deg)
+
+
+def decompose_sweep_numpy(r: SweepRings, heading_deg: float) -> list[tuple[FloatArray, FloatArray]]:
+    """:func:`decompose_sweep` in numpy: the reference for its compiled loops.
+
+    :func:`planner.cell_kernels.sweep_cells` computes the same cells;
+    ``tests/planner/test_cell_kernels.py`` holds them equal bit for bit.
+    """
+    u, v = to_sweep(r.x, r.y, heading_deg)
+    turn = (u - u[r.prv]) * (u[r.nxt] - u) <= 0.0
+    cuts = _cuts(u[turn])
+    if len(cuts) <= 2:
+        return [(u[: r.sizes[0]].copy(), v[: r.sizes[0]].copy())]
     pieces = _pieces(u, v, turn, cuts, r.sizes, r.first, r.ring_of, r.local, r.nxt, r.prv)
     if pieces is None:
         return _decompose_clipped(r.field, heading_deg)
@@ -328,7 +351,11 @@ def _cells(pieces: _Pieces, cuts: FloatArray) -> list[tuple[FloatArray, FloatArr
         cell_sizes.append(len(ring))
     flat = np.concatenate(index)
     # Drop repeated vertices (the chains of neighbouring pieces share their ends).
-    u, v, sizes = _drop_repeats(pieces.u[flat], cv[flat], np.asarray(cell_sizes))
+    return _rings(*_drop_repeats(pieces.u[flat], cv[flat], np.asarray(cell_sizes)))
+
+
+def _rings(u: FloatArray, v: FloatArray, sizes: IntArray) -> list[tuple[FloatArray, FloatArray]]:
+    """Split rings laid end to end, dropping those of under three vertices or no area."""
     ring = np.repeat(sizes >= 3, sizes)
     u, v, sizes = u[ring], v[ring], sizes[sizes >= 3]
     if not len(sizes):

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from shapely import MultiPolygon, Polygon
 
-from planner.cell_plans import CellPlan
+from planner.cell_plans import CellCover, CellPlan
 from planner.cell_route import CellFits, fit_cells
 from planner.footprints import cell_lines, cells_and_band_m2, lines_in_cells_m2
 from planner.line_ends import FittedLines, end_reach_m
@@ -218,19 +218,30 @@ def estimate(plan: CellPlan, vehicle: Vehicle, spacing_m: float) -> tuple[float,
     ends, one interval wide, off the coverage (:func:`planner.line_ends.fitting_loss_m2`'s
     turn term; the cells already lie in the machine area, so its width term is not taken).
     """
+    return estimate_m2(plan, vehicle, spacing_m), estimate_m(plan, vehicle, spacing_m)
+
+
+def estimate_m2(plan: CellPlan | CellCover, vehicle: Vehicle, spacing_m: float) -> float:
+    """:func:`estimate`'s coverage [m²]: it needs no cell order."""
     turns = _turn_count(plan)
-    length_m, reach_m = turn_change_m(vehicle, float(spacing_m))
-    covered = plan.covered_m2 - 2.0 * turns * reach_m * spacing_m
-    return covered, plan.length_m + turns * length_m
+    _, reach_m = turn_change_m(vehicle, float(spacing_m))
+    return plan.covered_m2 - 2.0 * turns * reach_m * spacing_m
 
 
-def _turn_count(plan: CellPlan) -> int:
+def estimate_m(plan: CellPlan, vehicle: Vehicle, spacing_m: float) -> float:
+    """:func:`estimate`'s length [m]."""
+    length_m, _ = turn_change_m(vehicle, float(spacing_m))
+    return plan.length_m + _turn_count(plan) * length_m
+
+
+def _turn_count(plan: CellPlan | CellCover) -> int:
     cells = sum(1 for c in plan.cells if c.lines.stop > c.lines.start)
     return max(plan.line_count - cells, 0)
 
 
 def choose_cells(
-    cheap: list[CellPlan],
+    covers: list[CellCover],
+    cheap: Callable[[int], CellPlan],
     objective: Objective,
     *,
     slack_m2: float,
@@ -249,49 +260,62 @@ def choose_cells(
     :data:`SHORTER_SHARE` shorter than the choice. The rule then picks among the fitted
     ones (:func:`choose_fitted`).
 
+    ``covers[i]`` is heading ``i`` before its cells are ordered, ``cheap(i)`` its cheap
+    plan: a heading whose length the rule never asks for (one that covers too little) is
+    never ordered.
+
     Returns
     -------
     chosen : FittedCells
     given_up_m2 : float
         Area it covers less than the best fitted heading [m²].
     """
-    figures = [estimate(c, vehicle, interval_m) for c in cheap]
-    best_m2 = max(f[0] for f in figures)
-    eligible = [i for i, f in enumerate(figures) if f[0] >= best_m2 - slack_m2]
+    covered = [estimate_m2(c, vehicle, interval_m) for c in covers]
+    lengths: dict[int, float] = {}
+
+    def length(i: int) -> float:
+        if i not in lengths:
+            lengths[i] = estimate_m(cheap(i), vehicle, interval_m)
+        return lengths[i]
+
+    best_m2 = max(covered)
+    eligible = [i for i, m2 in enumerate(covered) if m2 >= best_m2 - slack_m2]
+
+    def lines(i: int) -> float:
+        return float(covers[i].line_count) if objective == "fewest_lines" else 0.0
 
     def key(i: int) -> tuple[float, float]:
-        lines = float(cheap[i].line_count) if objective == "fewest_lines" else 0.0
-        return lines, figures[i][1]
+        return lines(i), length(i)
 
     eligible.sort(key=key)
     first = eligible[0]
     close = [
         i
         for i in eligible
-        if key(i)[0] == key(first)[0] and figures[i][1] <= figures[first][1] * (1 + CLOSE_SHARE)
+        if lines(i) == lines(first) and length(i) <= length(first) * (1 + CLOSE_SHARE)
     ][: 1 + CLOSE_PLANS]
-    fitted = {i: fit(cheap[i]) for i in close}
+    fitted = {i: fit(cheap(i)) for i in close}
     # The estimate calibrated on the choice: the area each of its turns really lost.
-    turns = [_turn_count(c) for c in cheap]
-    lost = max(cheap[first].covered_m2 - fitted[first].cells_m2, 0.0) / max(turns[first], 1)
+    turns = [_turn_count(c) for c in covers]
+    lost = max(covers[first].covered_m2 - fitted[first].cells_m2, 0.0) / max(turns[first], 1)
     best_fitted = max(f.cells_m2 for f in fitted.values())
     rivals = [
         i
-        for i in range(len(cheap))
-        if i not in fitted and cheap[i].covered_m2 - turns[i] * lost > best_fitted + slack_m2
+        for i in range(len(covers))
+        if i not in fitted and covers[i].covered_m2 - turns[i] * lost > best_fitted + slack_m2
     ]
-    fitted.update({i: fit(cheap[i]) for i in rivals})
+    fitted.update({i: fit(cheap(i)) for i in rivals})
     # The estimate's error is about the rule's slack: the shortest heading that it puts up
     # to one more slack below the best and that would save over 1 % is fitted too.
     shorter = [
         i
-        for i in range(len(cheap))
+        for i in range(len(covers))
         if i not in fitted
-        and key(i)[0] <= key(first)[0]
-        and figures[i][0] >= best_m2 - (1.0 + ESTIMATE_SLACKS) * slack_m2
-        and figures[i][1] < figures[first][1] * (1.0 - SHORTER_SHARE)
+        and lines(i) <= lines(first)
+        and covered[i] >= best_m2 - (1.0 + ESTIMATE_SLACKS) * slack_m2
+        and length(i) < length(first) * (1.0 - SHORTER_SHARE)
     ]
     if shorter:
-        shortest = min(shorter, key=lambda i: figures[i][1])
-        fitted[shortest] = fit(cheap[shortest])
+        shortest = min(shorter, key=length)
+        fitted[shortest] = fit(cheap(shortest))
     return choose_fitted([fitted[i] for i in sorted(fitted, key=key)], objective, slack_m2=slack_m2)

@@ -22,7 +22,7 @@ from shapely import Polygon
 
 from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
-from planner.cell_plans import CellPlan, plan_heading, reach_headland, reorder
+from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
 from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
@@ -216,12 +216,16 @@ def plan_general(
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
         prepared = [sweep_rings(p) for p in parts]
-        cheap = [
-            plan_heading(prepared, float(headings[a]), d, start_xy, after_lines, edge)
-            for a in ranked
-        ]
-        if rings:
-            cheap = [reach_headland(c, d) for c in cheap]
+        covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
+        orders: dict[int, CellPlan] = {}
+
+        def cheap(i: int) -> CellPlan:
+            # Ordered only when the rule asks for its length (most headings are).
+            if i not in orders:
+                plan = order_heading(covers[i], start_xy, after_lines)
+                orders[i] = reach_headland(plan, d) if rings else plan
+            return orders[i]
+
         # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
         # the close ones fitted (ends pulled back, lines dropped, the implement's width)
         # and the rule applied to those (planner.fitted_cells).
@@ -247,7 +251,7 @@ def plan_general(
             )
 
         chosen, given_up_m2 = choose_cells(
-            cheap, objective, slack_m2=slack_m2, fit=fit, vehicle=machine, interval_m=d
+            covers, cheap, objective, slack_m2=slack_m2, fit=fit, vehicle=machine, interval_m=d
         )
         fits = chosen.fits
         best = chosen.plan

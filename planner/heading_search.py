@@ -152,6 +152,37 @@ def _score_block(
     exteriors: int,
     scratch: FloatArray,
 ) -> HeadingScores:
+    """:func:`score_headings` at a block of headings, its per-edge terms compiled.
+
+    :func:`planner.cell_kernels.score_terms` computes what :func:`_score_block_numpy`
+    computes before its sums, by the same operations; the sums (numpy's pairwise ones) and
+    the turn-backs stay here. ``tests/planner/test_cell_kernels.py`` holds the two equal.
+    """
+    from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+    rows = len(headings_deg)
+    theta = np.radians(headings_deg)
+    cell_kernels.score_terms(xy, nxt, np.cos(theta), np.sin(theta), d, scratch)
+    working, missed, turns, pieces, du = scratch[:5, :rows]
+    return HeadingScores(
+        working_m=working.sum(axis=1),
+        pieces=pieces.sum(axis=1).astype(np.int64),
+        turn_backs=_turn_backs(du, sizes),
+        exteriors=exteriors,
+        missed_m2=missed.sum(axis=1),
+        turns_m=turns.sum(axis=1) / 2.0,
+    )
+
+
+def _score_block_numpy(
+    xy: FloatArray,
+    nxt: FloatArray,
+    sizes: list[int],
+    headings_deg: FloatArray,
+    d: float,
+    exteriors: int,
+    scratch: FloatArray,
+) -> HeadingScores:
     """:func:`score_headings` at a block of headings: every ring's vertices and their next.
 
     ``scratch`` holds :data:`_SCRATCH_ARRAYS` arrays of at least the block's shape to work
@@ -226,8 +257,19 @@ def _score_block(
     np.copyto(t, count)
     t[~entering] = 0.0
     pieces = t.sum(axis=1).astype(np.int64)
+    return HeadingScores(
+        working_m=working,
+        pieces=pieces,
+        turn_backs=_turn_backs(du, sizes),
+        exteriors=exteriors,
+        missed_m2=missed,
+        turns_m=turns,
+    )
 
-    turn_backs = np.zeros(len(headings_deg), dtype=np.int64)
+
+def _turn_backs(du: FloatArray, sizes: list[int]) -> IntArray:
+    """Per heading (rows of ``du``, each ring's edges' ``u2 - u1``), where rings turn back."""
+    turn_backs = np.zeros(len(du), dtype=np.int64)
     start = 0
     for m in sizes:
         ring_du = du[:, start : start + m]
@@ -245,12 +287,5 @@ def _score_block(
         ends = np.flatnonzero(np.diff(heading, append=-1))  # each heading's last edge
         begins = np.concatenate(([0], ends[:-1] + 1))
         previous[begins] = forward[ends]
-        turn_backs += np.bincount(heading[forward != previous], minlength=len(headings_deg))
-    return HeadingScores(
-        working_m=working,
-        pieces=pieces,
-        turn_backs=turn_backs,
-        exteriors=exteriors,
-        missed_m2=missed,
-        turns_m=turns,
-    )
+        turn_backs += np.bincount(heading[forward != previous], minlength=len(du))
+    return turn_backs

@@ -530,7 +530,8 @@ def warm_up() -> None:
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
     coverage_excess(ring_u, ring_v, 1.0)
     length_aggregates(ring_u, ring_v, 1.0)
-    from planner import coverage_kernels, fit_kernels  # the other modules' loops
+    from planner import cell_kernels, coverage_kernels, fit_kernels  # the other modules' loops
 
     fit_kernels.warm_up()
     coverage_kernels.warm_up()
+    cell_kernels.warm_up()

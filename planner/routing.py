@@ -138,10 +138,21 @@ class FieldRouter:
         lines = shapely.linestrings(points[:, ::-1] if self._swap else points, indices=owner)
         return np.asarray(shapely.contains_properly(self._test, lines))
 
-    def _snap(self, point: FloatArray) -> FloatArray:
-        """Return ``point``, or its nearest point of the field if it lies just outside."""
+    def _covers(self, points: FloatArray) -> npt.NDArray[np.bool_]:
+        """Whether the (grown) field covers each of ``points`` (shape (k, 2)), in one call."""
+        return np.asarray(
+            shapely.covers(self._test, shapely.points(points[:, ::-1] if self._swap else points))
+        )
+
+    def _snap(self, point: FloatArray, covered: bool | None = None) -> FloatArray:
+        """Return ``point``, or its nearest point of the field if it lies just outside.
+
+        ``covered``: whether the field covers ``point``, if known (:meth:`_covers`).
+        """
         here = shapely.Point(point)
-        if shapely.covers(self._test, shapely.Point(point[::-1] if self._swap else point)):
+        if covered is None:
+            covered = bool(self._covers(point[None])[0])
+        if covered:
             return point
         distance = self.field.distance(here)
         if distance > SNAP_M:
@@ -176,15 +187,29 @@ class FieldRouter:
         The straight moves are found in one test of them all; only the others are searched.
         """
         starts, ends = np.asarray(starts, dtype=float), np.asarray(ends, dtype=float)
-        straight = self.inside(starts, ends).tolist()
+        straight = self.inside(starts, ends)
+        # Whether the field covers each searched move's ends: one test of them all.
+        searched = np.flatnonzero(~straight)
+        covered = self._covers(np.concatenate([starts[searched], ends[searched]]))
+        cover_a = dict(zip(searched.tolist(), covered[: len(searched)].tolist(), strict=True))
+        cover_b = dict(zip(searched.tolist(), covered[len(searched) :].tolist(), strict=True))
         return [
-            np.stack([a, b]) if seen else self._search(a, b)
-            for a, b, seen in zip(starts, ends, straight, strict=True)
+            np.stack([a, b]) if seen else self._search(a, b, cover_a[k], cover_b[k])
+            for k, (a, b, seen) in enumerate(zip(starts, ends, straight.tolist(), strict=True))
         ]
 
-    def _search(self, a: FloatArray, b: FloatArray) -> FloatArray:
-        """:meth:`path` of a move whose straight segment leaves the field."""
-        snapped_a, snapped_b = self._snap(a), self._snap(b)
+    def _search(
+        self,
+        a: FloatArray,
+        b: FloatArray,
+        covered_a: bool | None = None,
+        covered_b: bool | None = None,
+    ) -> FloatArray:
+        """:meth:`path` of a move whose straight segment leaves the field.
+
+        ``covered_a``, ``covered_b``: whether the field covers ``a`` and ``b``, if known.
+        """
+        snapped_a, snapped_b = self._snap(a, covered_a), self._snap(b, covered_b)
         if snapped_a is not a or snapped_b is not b:
             inner = self.path(
                 (float(snapped_a[0]), float(snapped_a[1])),
@@ -384,7 +409,15 @@ class FieldRouter:
         """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both.
 
         A shortest path only passes a corner it wraps round, so other pairs need no edge.
+        Compiled (:func:`planner.cell_kernels.tangent_pairs`, the same arithmetic);
+        :meth:`_tangent_pairs_numpy` is the reference.
         """
+        from planner import cell_kernels  # numba: imported by the first plan that needs it
+
+        return cell_kernels.tangent_pairs(self._xy, self._around, i, j, _COLLINEAR)
+
+    def _tangent_pairs_numpy(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
+        """:meth:`_tangent_pairs` in numpy."""
         x, y = self._xy
         dx, dy = x[j] - x[i], y[j] - y[i]
         # A neighbour within 1e-9 rad of the line counts as on it (sines, as distances).
