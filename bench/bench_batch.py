@@ -13,6 +13,7 @@ together is sampled every 0.1 s. Flat memory: the peak for 100,000 close to that
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import tempfile
 import time
@@ -35,7 +36,13 @@ if TYPE_CHECKING:
 ROOT = Path(__file__).resolve().parent.parent
 FIELDS = ROOT.parent / "shared" / "fields"
 BUDGET_SPEEDUP = 1.7
-MEMORY_SIZES = (10_000, 100_000)
+#: Field counts of the memory runs; ``TILLPATH_BENCH_MEMORY_SIZES=10000`` (comma-separated,
+#: empty for none) runs fewer, for a partial run (the 100,000-field run takes ~20 minutes).
+MEMORY_SIZES = tuple(
+    int(n)
+    for n in os.environ.get("TILLPATH_BENCH_MEMORY_SIZES", "10000,100000").split(",")
+    if n.strip()
+)
 
 
 def write_gpkg(path: Path, geometries: list[bytes], ids: list[str]) -> None:
