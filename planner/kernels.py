@@ -102,6 +102,46 @@ def _left(keys: FloatArray, start: int, stop: int, q: float) -> int:
     return lo
 
 
+#: Rings up to this many vertices are sorted in place by insertion (a field's few corners);
+#: longer ones by ``np.sort``, which allocates its result.
+_INSERTION_MAX = 32
+
+
+@_jit
+def _sorted_into(values: FloatArray, out: FloatArray) -> None:
+    """``out[:] = np.sort(values)``, without allocating for a short ``values``.
+
+    Floats sort the same whichever the algorithm: equal values are the same bits (the
+    kernels sort no ``-0.0`` beside ``0.0``), and NaN goes last as in ``np.sort``.
+    """
+    n = len(values)
+    if n > _INSERTION_MAX:
+        out[:] = np.sort(values)
+        return
+    for i in range(n):
+        x = values[i]
+        j = i
+        # x before out[j - 1]: smaller, or a number before a NaN (np.sort's order).
+        while j > 0 and (x < out[j - 1] or (out[j - 1] != out[j - 1] and x == x)):
+            out[j] = out[j - 1]
+            j -= 1
+        out[j] = x
+
+
+@_jit
+def _stable_order_into(keys: IntArray, n: int, out: IntArray) -> None:
+    """``out[:n] = np.argsort(keys[:n], kind="mergesort")``: ties in their order."""
+    if n > _INSERTION_MAX:
+        out[:n] = np.argsort(keys[:n], kind="mergesort")
+        return
+    for i in range(n):
+        j = i
+        while j > 0 and keys[i] < keys[out[j - 1]]:
+            out[j] = out[j - 1]
+            j -= 1
+        out[j] = i
+
+
 @_jit
 def _line_count(width: float, d: float) -> int:
     """:func:`planner.lines.line_counts` of one width."""
@@ -296,7 +336,7 @@ def _coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float, out: Float
         for i in range(1, n_hi):
             if hk[i] < hk[i - 1]:
                 return False
-        cuts[:] = np.sort(u_ring[h])
+        _sorted_into(u_ring[h], cuts)
         n = _line_count(width[h], d)
         narrow = width[h] <= d
         last_regular = -1.0 if narrow else float(n - 3)
@@ -397,6 +437,12 @@ def _length_aggregates(
     used = np.empty(m, dtype=np.int64)
     keys = np.empty(m, dtype=np.int64)
     picks = np.empty(m, dtype=np.int64)
+    order = np.empty(m, dtype=np.int64)
+    # Per chain: total, even, odd, v first, v penultimate, v last, even and odd jumps (views
+    # of one array zeroed per heading: a list literal would allocate eight per heading).
+    sums = np.empty((8, 2))
+    total, even, odd, v_first = sums[0], sums[1], sums[2], sums[3]
+    v_penult, v_last, even2, odd2 = sums[4], sums[5], sums[6], sums[7]
     for h in range(n_headings):
         u_min = u_ring[h, 0]
         u_max = u_ring[h, 0]
@@ -412,12 +458,7 @@ def _length_aggregates(
         penult = regular - 1
         p_penult = p0 + penult * d
         # Per chain (0 lower, 1 upper), as np.bincount adds them: edge by edge.
-        total = [0.0, 0.0]
-        even = [0.0, 0.0]
-        odd = [0.0, 0.0]
-        v_first = [0.0, 0.0]
-        v_penult = [0.0, 0.0]
-        v_last = [0.0, 0.0]
+        sums[:] = 0.0
         n_edges = 0
         for e in range(m):
             nx = e + 1 if e + 1 < m else 0
@@ -456,11 +497,9 @@ def _length_aggregates(
                 keys[n_used] = groups[i] * (regular + 2) + k1s[i]
                 picks[n_used] = i
                 n_used += 1
-        order = np.argsort(keys[:n_used], kind="mergesort")
+        _stable_order_into(keys, n_used, order)
         for j in range(n_used):
             used[j] = picks[order[j]]
-        even2 = [0.0, 0.0]
-        odd2 = [0.0, 0.0]
         for j in range(1, n_used):
             into, prev = used[j], used[j - 1]
             g = groups[into]

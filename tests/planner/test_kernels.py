@@ -72,3 +72,20 @@ def test_coverage_kernel_declines_chains_out_of_order() -> None:
     ring = np.array([[0, 0], [10, 0], [5, 1], [8, 2], [3, 3], [9, 4], [0, 6]], dtype=float)
     u, v = to_sweep(ring[:, 0], ring[:, 1], np.array([[0.0]]))
     assert kernels.coverage_excess(u, v, 1.0) is None
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 5, 32, 33, 80])
+def test_sorts_without_allocating_equal_numpy(n: int) -> None:
+    """The kernels' in-place sorts give np.sort's values and the stable argsort's order."""
+    rng = np.random.default_rng(n)
+    for _ in range(20):
+        values = np.round(rng.normal(size=n), 1)  # ties
+        if n > 2:
+            values[rng.integers(n)] = np.nan  # np.sort puts NaN last
+        out = np.empty(n)
+        kernels._sorted_into(values, out)
+        assert np.array_equal(out, np.sort(values), equal_nan=True)
+        keys = rng.integers(0, 4, size=n + 3)  # only the first n are sorted
+        order = np.full(n + 3, -1, dtype=np.int64)
+        kernels._stable_order_into(keys, n, order)
+        assert order[:n].tolist() == np.argsort(keys[:n], kind="mergesort").tolist()
