@@ -1,20 +1,17 @@
-"""Compiled loops for fields planned in cells, with the numpy code's arithmetic.
+"""Compiled loops for a non-convex heading's cells and lines, with the numpy code's arithmetic.
 
 A non-convex field is planned at about eight headings, and each is decomposed into cells
-(:func:`planner.decomposition.decompose_sweep`), its lines scanned
-(:func:`planner.lines.scan_cells`) and the cells ordered
-(:mod:`planner.cell_order`); before that the headings are scored
-(:mod:`planner.heading_search`), and after it the moves between cells are routed round the
-corners that wrap them (:class:`planner.routing.FieldRouter`). The numpy code is vectorised,
-but a field has a few cells of a few dozen vertices, so its cost is the ~200 numpy calls per
-heading (a few µs apiece) and the per-cell calls. These kernels do the same computations in loops,
-compiled by numba: every value is computed by the same operations in the same order (the
-searches run on the same keys, ties sort as ``np.lexsort`` sorts them, the last of two writes
-to a line wins as in numpy's fancy assignment), so the cells, lines and orders, and so the
-plans, are the same to the last bit. The rotation into the sweep frame, the critical cuts
-(``np.unique``), the cells' areas and the heading scores' sums (numpy's pairwise sums) stay
-in numpy. Every kernel takes one array type (C-contiguous, writable), so :func:`warm_up`
-compiles all that the plans call.
+(:func:`planner.decomposition.decompose_sweep`) and its lines scanned
+(:func:`planner.lines.scan_cells`). The numpy code is vectorised, but a field has a few cells
+of a few dozen vertices, so its cost is the ~200 numpy calls per heading (a few µs apiece) and
+the per-cell calls. These kernels do the same computations in loops, compiled by numba: every
+value is computed by the same operations in the same order (the searches run on the same keys,
+ties sort as ``np.lexsort`` sorts them, the last of two writes to a line wins as in numpy's
+fancy assignment), so the cells and lines, and so the plans, are the same to the last bit. The
+rotation into the sweep frame, the critical cuts (``np.unique``) and the cells' areas stay in
+numpy. Every kernel takes one array type (C-contiguous, writable), so :func:`warm_up` compiles
+all that the plans call. The cells' order searches are :mod:`planner.order_kernels`; the
+heading scores' terms and the router's corner test are :mod:`planner.edge_kernels`.
 
 The numpy code stays the reference: ``tests/planner/test_cell_kernels.py`` compares the two
 bit for bit on random fields and the real ones. Like :mod:`planner.kernels`, the kernels are
@@ -26,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit, _left, _mn, _mx, _right
+from planner.kernels import _jit, _left, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -434,299 +431,6 @@ def scan_rings(
     return _scan(u, v, starts, sizes, float(interval_m), float(edge_m))
 
 
-@_jit
-def _move(
-    move: FloatArray, exits: FloatArray, entries: FloatArray, a: int, i: int, b: int, j: int
-) -> float:
-    """Return the move from the exit of ``(a, i)`` to the entry of ``(b, j)`` (``move``).
-
-    Straight (``move`` empty) as ``planner.cell_order._StraightProblem`` computes it.
-    """
-    if move.shape[0] == 0:
-        return float(np.hypot(exits[a, i, 0] - entries[b, j, 0], exits[a, i, 1] - entries[b, j, 1]))
-    return float(move[a, i, b, j])
-
-
-@_jit
-def _order_costs(
-    move: FloatArray,
-    exits: FloatArray,
-    entries: FloatArray,
-    first: FloatArray,
-    last: FloatArray,
-    inner: FloatArray,
-    orders: IntArray,
-) -> FloatArray:
-    """``planner.cell_order._Problem.costs``: the best variants' route length of each order."""
-    k_orders, n = orders.shape
-    out = np.empty(k_orders)
-    here = np.empty(4)
-    after = np.empty(4)
-    for k in range(k_orders):
-        c = orders[k, 0]
-        for j in range(4):
-            here[j] = first[c, j]
-        for t in range(1, n):
-            a, b = orders[k, t - 1], orders[k, t]
-            for j in range(4):
-                best = here[0] + _move(move, exits, entries, a, 0, b, j)
-                for i in range(1, 4):
-                    best = _min_nan(best, here[i] + _move(move, exits, entries, a, i, b, j))
-                after[j] = best + inner[b, j]
-            for j in range(4):
-                here[j] = after[j]
-        c = orders[k, n - 1]
-        best = here[0] + last[c, 0]
-        for j in range(1, 4):
-            best = _min_nan(best, here[j] + last[c, j])
-        out[k] = best
-    return out
-
-
-@_jit
-def _min_nan(best: float, x: float) -> float:
-    """One step of ``np.min``: NaN wins, else the smaller."""
-    if best != best:
-        return best
-    return x if (x < best or x != x) else best
-
-
-@_jit
-def _order_variants(
-    move: FloatArray,
-    exits: FloatArray,
-    entries: FloatArray,
-    first: FloatArray,
-    last: FloatArray,
-    inner: FloatArray,
-    order: IntArray,
-) -> IntArray:
-    """``planner.cell_order._Problem.variants``: Viterbi with back-pointers (``np.argmin``)."""
-    n = len(order)
-    back = np.empty((n, 4), dtype=np.int64)
-    here = np.empty(4)
-    after = np.empty(4)
-    for j in range(4):
-        here[j] = first[order[0], j]
-    for t in range(1, n):
-        a, b = order[t - 1], order[t]
-        for j in range(4):
-            best = here[0] + _move(move, exits, entries, a, 0, b, j)
-            arg = 0
-            for i in range(1, 4):
-                x = here[i] + _move(move, exits, entries, a, i, b, j)
-                if best == best and (x < best or x != x):
-                    best, arg = x, i
-            back[t, j] = arg
-            after[j] = best + inner[b, j]
-        for j in range(4):
-            here[j] = after[j]
-    chosen = np.empty(n, dtype=np.int64)
-    c = order[n - 1]
-    best = here[0] + last[c, 0]
-    w = 0
-    for j in range(1, 4):
-        x = here[j] + last[c, j]
-        if best == best and (x < best or x != x):
-            best, w = x, j
-    chosen[n - 1] = w
-    for t in range(n - 1, 0, -1):
-        w = back[t, w]
-        chosen[t - 1] = w
-    return chosen
-
-
-@_jit
-def _order_greedy(
-    move: FloatArray, exits: FloatArray, entries: FloatArray, first: FloatArray, inner: FloatArray
-) -> IntArray:
-    """``planner.cell_order._Problem.greedy``: nearest cell next (``np.argmin``'s first)."""
-    m = len(inner)
-    current = 0
-    best = np.inf
-    for c in range(m):
-        row_min = first[c, 0]
-        for j in range(1, 4):
-            row_min = _min_nan(row_min, first[c, j])
-        if c == 0 or (best == best and (row_min < best or row_min != row_min)):
-            best, current = row_min, c
-    w_here = 0
-    for j in range(1, 4):
-        x = first[current, j]
-        y = first[current, w_here]
-        if y == y and (x < y or x != x):
-            w_here = j
-    order = np.empty(m, dtype=np.int64)
-    order[0] = current
-    visited = np.zeros(m, dtype=np.bool_)
-    visited[current] = True
-    for step in range(1, m):
-        best = np.inf
-        flat = -1
-        for c in range(m):
-            for j in range(4):
-                x = (
-                    np.inf
-                    if visited[c]
-                    else _move(move, exits, entries, current, w_here, c, j) + inner[c, j]
-                )
-                if flat < 0 or (best == best and (x < best or x != x)):
-                    best, flat = x, c * 4 + j
-        current, w_here = flat // 4, flat % 4
-        order[step] = current
-        visited[current] = True
-    return order
-
-
-def _writable(a: IntArray) -> IntArray:
-    """Return ``a`` as int64, C-contiguous and writable: the type the kernels are compiled for.
-
-    (A read-only array, such as the shared permutations, would compile another copy.)
-    """
-    return np.require(a, dtype=np.int64, requirements=["C", "W"])
-
-
-def order_costs(
-    move: FloatArray,
-    exits: FloatArray,
-    entries: FloatArray,
-    first: FloatArray,
-    last: FloatArray,
-    inner: FloatArray,
-    orders: IntArray,
-) -> FloatArray:
-    """Route length of the best variants of each of ``orders`` (K, m), compiled.
-
-    ``move`` is (m, 4, m, 4), or (0, 4, 0, 4) for straight moves from ``exits`` to
-    ``entries`` (m, 4, 2); ``first``, ``last`` and ``inner`` are (m, 4); all float64 and
-    C-contiguous (:class:`planner.cell_order._Problem`).
-    """
-    return _order_costs(move, exits, entries, first, last, inner, _writable(orders))
-
-
-def order_variants(
-    move: FloatArray,
-    exits: FloatArray,
-    entries: FloatArray,
-    first: FloatArray,
-    last: FloatArray,
-    inner: FloatArray,
-    order: IntArray,
-) -> IntArray:
-    """Choose the best variant of every cell of ``order``, compiled (:func:`order_costs`)."""
-    return _order_variants(move, exits, entries, first, last, inner, _writable(order))
-
-
-def order_greedy(
-    move: FloatArray, exits: FloatArray, entries: FloatArray, first: FloatArray, inner: FloatArray
-) -> IntArray:
-    """Nearest cell next, from the cell that begins best, compiled (:func:`order_costs`)."""
-    return _order_greedy(move, exits, entries, first, inner)
-
-
-@_jit
-def _tangent_pairs(
-    xy: FloatArray, around: FloatArray, i: IntArray, j: IntArray, collinear: float
-) -> BoolArray:
-    """``planner.routing.FieldRouter._tangent_pairs``: one pair at a time."""
-    out = np.empty(len(i), dtype=np.bool_)
-    for k in range(len(i)):
-        a, b = i[k], j[k]
-        dx = xy[0, b] - xy[0, a]
-        dy = xy[1, b] - xy[1, a]
-        tolerance = collinear * np.hypot(dx, dy)
-        if tolerance == 0.0:
-            out[k] = True
-            continue
-        wraps = True
-        for c in (a, b):
-            before = dx * around[1, c] - dy * around[0, c]
-            after = dx * around[3, c] - dy * around[2, c]
-            wraps = wraps and (
-                abs(before) < tolerance or abs(after) < tolerance or before * after > 0.0
-            )
-        out[k] = wraps
-    return out
-
-
-def tangent_pairs(
-    xy: FloatArray, around: FloatArray, i: IntArray, j: IntArray, collinear: float
-) -> BoolArray:
-    """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both, compiled.
-
-    ``xy`` (2, n) and ``around`` (4, n) as :class:`planner.routing.FieldRouter` keeps them.
-    """
-    return _tangent_pairs(
-        xy,
-        around,
-        _writable(i),
-        _writable(j),
-        collinear,
-    )
-
-
-@_jit
-def _score_terms(
-    xy: FloatArray,
-    nxt: FloatArray,
-    cos_t: FloatArray,
-    sin_t: FloatArray,
-    d: float,
-    out: FloatArray,
-) -> None:
-    """``planner.heading_search._score_block``'s per-edge terms, before its sums.
-
-    ``out[0..4]`` (each (rows, n)) get each edge's working, missed, turn and piece terms
-    and its ``du``, every value by the numpy code's operations in its order.
-    """
-    rows, n = len(cos_t), len(xy)
-    half = d / 2.0
-    for r in range(rows):
-        c, s = cos_t[r], sin_t[r]
-        first = np.inf
-        for e in range(n):
-            u1 = xy[e, 0] * c - xy[e, 1] * s
-            first = _mn(first, u1) if e else u1
-        first = first + half
-        for e in range(n):
-            u1 = xy[e, 0] * c - xy[e, 1] * s
-            v1 = xy[e, 0] * s + xy[e, 1] * c
-            u2 = nxt[e, 0] * c - nxt[e, 1] * s
-            v2 = nxt[e, 0] * s + nxt[e, 1] * c
-            k1 = _mx(np.ceil((_mn(u1, u2) - first) / d), 0.0)
-            k2 = _mx(np.ceil((_mx(u1, u2) - first) / d), 0.0)
-            count = k2 - k1
-            du = u2 - u1
-            slope = 0.0 if du == 0.0 else (v2 - v1) / du
-            sum_k = (k1 + k2 - 1.0) * count / 2.0 * d
-            t = slope * (count * (first - u1) + sum_k)
-            sum_v = count * v1 + t
-            out[0, r, e] = -sum_v if du > 0.0 else sum_v
-            dv = abs(v2 - v1)
-            out[1, r, e] = _mn(count * abs(slope) * d * d / 8.0, dv * d / 2.0)
-            edge_m = np.hypot(du, dv)
-            out[2, r, e] = _mn(count * d * np.sqrt(1.0 + slope * slope), edge_m)
-            out[3, r, e] = count if du > 0.0 else 0.0
-            out[4, r, e] = du
-
-
-def score_terms(
-    xy: FloatArray,
-    nxt: FloatArray,
-    cos_t: FloatArray,
-    sin_t: FloatArray,
-    d: float,
-    scratch: FloatArray,
-) -> None:
-    """Write the per-edge terms of a block of headings into ``scratch[:5, :rows]``.
-
-    ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones; ``cos_t``, ``sin_t``
-    (rows,): the headings' (numpy's) cosines and sines; ``scratch`` C-contiguous, at least
-    (5, rows, n). Compiled: see ``_score_terms``.
-    """
-    _score_terms(np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, d, scratch)
-
-
 def warm_up() -> None:
     """Compile the kernels, or load them from the disk cache, on a tiny field."""
     # An L: one cut through its inner corner, three cells at 135°.
@@ -740,14 +444,3 @@ def warm_up() -> None:
     v = np.concatenate([r[1] for r in rings])
     sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
     scan_rings(u, v, sizes, 4.0, 2.0)
-    move = np.ones((2, 4, 2, 4))
-    xy = np.zeros((2, 4, 2))
-    ends = np.zeros((2, 4))
-    order_costs(move, xy, xy, ends, ends, ends, np.array([[0, 1], [1, 0]]))
-    order_variants(move, xy, xy, ends, ends, ends, np.array([0, 1]))
-    order_greedy(move, xy, xy, ends, ends)
-    pair = np.array([0, 1])
-    score_terms(
-        np.ones((2, 2)), np.zeros((2, 2)), np.ones(1), np.zeros(1), 1.0, np.empty((5, 1, 2))
-    )
-    tangent_pairs(np.ones((2, 2)), np.ones((4, 2)), pair, pair[::-1], 1e-9)

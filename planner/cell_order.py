@@ -128,7 +128,7 @@ class _Problem:
         self._compile(move, np.empty((0, 4, 2)), np.empty((0, 4, 2)))
 
     def _compile(self, move: FloatArray, exits: FloatArray, entries: FloatArray) -> None:
-        # The searches run compiled (planner.cell_kernels, the same figures) on float64 costs;
+        # The searches run compiled (planner.order_kernels, the same figures) on float64 costs;
         # the methods below stay the numpy reference.
         arrays = (move, exits, entries, self.first, self.last, self.inner)
         self.compiled = all(a.dtype == np.float64 for a in arrays)
@@ -150,27 +150,27 @@ class _Problem:
         """:meth:`costs`, compiled where it can be."""
         if not self.compiled:
             return self.costs(orders)
-        from planner import cell_kernels  # numba: imported by the first plan that needs it
+        from planner import order_kernels  # numba: imported by the first plan that needs it
 
-        return cell_kernels.order_costs(*self._arrays, orders)
+        return order_kernels.order_costs(*self._arrays, orders)
 
     def search_variants(self, order: IntArray) -> list[tuple[int, int]]:
         """:meth:`variants`, compiled where it can be."""
         if not self.compiled:
             return self.variants(order)
-        from planner import cell_kernels
+        from planner import order_kernels
 
-        chosen = cell_kernels.order_variants(*self._arrays, order)
+        chosen = order_kernels.order_variants(*self._arrays, order)
         return list(zip(order.tolist(), chosen.tolist(), strict=True))
 
     def search_greedy(self) -> IntArray:
         """:meth:`greedy`, compiled where it can be."""
         if not self.compiled:
             return self.greedy()
-        from planner import cell_kernels
+        from planner import order_kernels
 
         move, exits, entries, first, _, inner = self._arrays
-        return cell_kernels.order_greedy(move, exits, entries, first, inner)
+        return order_kernels.order_greedy(move, exits, entries, first, inner)
 
     def step(self, a: IntArray, b: IntArray) -> FloatArray:
         """Return the moves from every variant of cells ``a`` to those of cells ``b``, (K, 4, 4)."""

@@ -154,15 +154,15 @@ def _score_block(
 ) -> HeadingScores:
     """:func:`score_headings` at a block of headings, its per-edge terms compiled.
 
-    :func:`planner.cell_kernels.score_terms` computes what :func:`_score_block_numpy`
+    :func:`planner.edge_kernels.score_terms` computes what :func:`_score_block_numpy`
     computes before its sums, by the same operations; the sums (numpy's pairwise ones) and
     the turn-backs stay here. ``tests/planner/test_cell_kernels.py`` holds the two equal.
     """
-    from planner import cell_kernels  # numba: imported by the first plan that needs it
+    from planner import edge_kernels  # numba: imported by the first plan that needs it
 
     rows = len(headings_deg)
     theta = np.radians(headings_deg)
-    cell_kernels.score_terms(xy, nxt, np.cos(theta), np.sin(theta), d, scratch)
+    edge_kernels.score_terms(xy, nxt, np.cos(theta), np.sin(theta), d, scratch)
     working, missed, turns, pieces, du = scratch[:5, :rows]
     return HeadingScores(
         working_m=working.sum(axis=1),

@@ -569,8 +569,16 @@ def warm_up() -> None:
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
     coverage_excess(ring_u, ring_v, 1.0)
     length_aggregates(ring_u, ring_v, 1.0)
-    from planner import cell_kernels, coverage_kernels, fit_kernels  # the other modules' loops
+    from planner import (  # the other modules' loops
+        cell_kernels,
+        coverage_kernels,
+        edge_kernels,
+        fit_kernels,
+        order_kernels,
+    )
 
     fit_kernels.warm_up()
     coverage_kernels.warm_up()
     cell_kernels.warm_up()
+    order_kernels.warm_up()
+    edge_kernels.warm_up()

@@ -409,12 +409,12 @@ class FieldRouter:
         """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both.
 
         A shortest path only passes a corner it wraps round, so other pairs need no edge.
-        Compiled (:func:`planner.cell_kernels.tangent_pairs`, the same arithmetic);
+        Compiled (:func:`planner.edge_kernels.tangent_pairs`, the same arithmetic);
         :meth:`_tangent_pairs_numpy` is the reference.
         """
-        from planner import cell_kernels  # numba: imported by the first plan that needs it
+        from planner import edge_kernels  # numba: imported by the first plan that needs it
 
-        return cell_kernels.tangent_pairs(self._xy, self._around, i, j, _COLLINEAR)
+        return edge_kernels.tangent_pairs(self._xy, self._around, i, j, _COLLINEAR)
 
     def _tangent_pairs_numpy(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
         """:meth:`_tangent_pairs` in numpy."""

@@ -1,4 +1,7 @@
-"""The compiled cells (planner.cell_kernels) equal their numpy references bit for bit."""
+"""The compiled cells, order searches, heading terms and corner test equal numpy bit for bit.
+
+(planner.cell_kernels, planner.order_kernels and planner.edge_kernels.)
+"""
 
 from __future__ import annotations
 
@@ -11,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely import Polygon
 
-from planner import cell_kernels
+from planner import cell_kernels, edge_kernels, order_kernels
 from planner.cell_order import (
     EXHAUSTIVE_MAX_CELLS,
     LOCAL_SEARCH_MAX_CELLS,
@@ -150,6 +153,8 @@ def test_real_fields_compiled_equal_numpy(part: int) -> None:
 
 def test_warm_up_runs() -> None:
     cell_kernels.warm_up()
+    order_kernels.warm_up()
+    edge_kernels.warm_up()
 
 
 def problems(seed: int, count: int) -> list[_Problem]:
