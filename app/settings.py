@@ -90,5 +90,9 @@ class Settings(BaseSettings):
 
 @lru_cache
 def get_settings() -> Settings:
-    """Return the process-wide settings (cached; tests override this dependency)."""
+    """Return the process-wide settings from the environment (cached).
+
+    Routes do not call this: they take the settings their app was made with
+    (:func:`app.dependencies.request_settings`), which tests replace.
+    """
     return Settings()
