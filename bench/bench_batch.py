@@ -25,7 +25,7 @@ import psutil
 import pyogrio.raw
 import shapely
 
-from app.cli.batch import run_batch
+from app.cli.batch import FIELDS_PER_TASK, run_batch
 from app.jobs.engine import start_local_cluster
 from app.testing import tillpath_command
 from bench.common import small_quadrilaterals
@@ -107,7 +107,7 @@ def timed_batch(
             options={"interval_m": 4.0},
             scheduler=cluster.scheduler_address,
             workers=workers,
-            per_task=4,
+            per_task=FIELDS_PER_TASK,
             show_progress=False,
         )
         return time.perf_counter() - started, rows, failed
@@ -162,7 +162,8 @@ def run() -> str:
             "## `tillpath plan-batch`\n",
             f"The {count} real fields of `../shared/fields` in one GeoPackage, at 4 m, on a "
             "local Dask cluster (started before the clock; its workers load the planner's "
-            "kernels inside it, as every `plan-batch` run does), 4 fields per task:",
+            "kernels inside it, as every `plan-batch` run does), "
+            f"{FIELDS_PER_TASK} fields per task (the command's default):",
             "",
             "| workers | seconds | fields/s | fields/s per worker | failed |",
             "| ---: | ---: | ---: | ---: | ---: |",
