@@ -133,7 +133,8 @@ def _scan_cells(
 
     :func:`scan_cells_numpy` is the reference (``tests/planner/test_cell_kernels.py``).
     """
-    if not rings:
+    # No rings, or an empty ring (the kernel would read its first vertex): numpy decides.
+    if not rings or any(len(u) == 0 or len(v) != len(u) for u, v in rings):
         return scan_cells_numpy(rings, d, edge_m)
     from planner import cell_kernels  # numba: imported by the first plan that needs it
 

@@ -381,8 +381,10 @@ def laid_out(
     """Return ``coverage._laid_out``'s odd cells, pieces' areas and pieces' cells (or None).
 
     ``packed``: each cell's ``Chains.packed`` in turn. ``offsets`` must start at 0 and end at
-    ``len(u)``.
+    ``len(u)``; ``v_lo`` and ``v_hi`` as long as ``u`` (else None: the numpy code decides).
     """
+    if not len(v_lo) == len(v_hi) == len(u):
+        return None
     ok, odd, area, cell = _laid_out(
         packed,
         np.ascontiguousarray(offsets, dtype=np.int64),

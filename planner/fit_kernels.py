@@ -351,8 +351,11 @@ def fit_turns(
 ) -> tuple[FloatArray, npt.NDArray[np.bool_], FloatArray] | None:
     """Each turn's shift along ``v``, whether it fits, and its points moved by the shift.
 
-    None where the numpy code must decide (chains out of order; see ``_fit_turns``).
+    None where the numpy code must decide (chains out of order, see ``_fit_turns``; an empty
+    chain or a chain's ``u`` and ``v`` of other lengths, which the kernel would read past).
     """
+    if not (0 < len(lo_u) == len(lo_v) and 0 < len(hi_u) == len(hi_v)):
+        return None
     n = len(offsets) - 1
     shift, fits, moved = np.empty(n), np.empty(n, dtype=np.bool_), np.empty((len(xy), 2))
     f = _floats

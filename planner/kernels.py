@@ -12,7 +12,10 @@ arrays (the ring's area).
 
 The numpy code stays the reference: ``tests/planner/test_kernels.py`` compares the two bit
 for bit, and a ring the kernels cannot vouch for (chain edges out of order, which a convex
-ring never has) is scored by the numpy code instead.
+ring never has) is scored by the numpy code instead. That equality is tested on the CPU the
+tests run on: on another CPU numpy may take other code paths for ``sin``, ``cos``,
+``arccos`` and ``arctan2`` (AVX-512 SVML), where the kernels still give a deterministic plan
+but may differ from the numpy code in the last bit.
 
 Numba compiles each kernel the first time it runs and caches the machine code on disk
 (``cache=True``: in ``NUMBA_CACHE_DIR`` if set, else next to this module, else in the user's
@@ -111,8 +114,10 @@ _INSERTION_MAX = 32
 def _sorted_into(values: FloatArray, out: FloatArray) -> None:
     """``out[:] = np.sort(values)``, without allocating for a short ``values``.
 
-    Floats sort the same whichever the algorithm: equal values are the same bits (the
-    kernels sort no ``-0.0`` beside ``0.0``), and NaN goes last as in ``np.sort``.
+    Floats sort the same whichever the algorithm: equal values are the same bits, but for
+    ``-0.0`` and ``0.0``, which compare equal and may come out in another order than
+    ``np.sort``'s (the tests compare bits with the zeros' signs ignored); NaN goes last as
+    in ``np.sort``.
     """
     n = len(values)
     if n > _INSERTION_MAX:

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely import Polygon
 
-from planner import cell_kernels, edge_kernels, order_kernels
+from planner import cell_kernels, edge_kernels, heading_search, order_kernels
 from planner.cell_order import (
     EXHAUSTIVE_MAX_CELLS,
     LOCAL_SEARCH_MAX_CELLS,
@@ -280,3 +280,67 @@ def test_heading_scores_of_random_fields_compiled_equal_numpy(
         if not isinstance(field, Polygon) or field.is_empty or not field.is_valid:
             return
     assert_same_scores([field], np.arange(0.0, 180.0, 3.0), 4.0)
+
+
+def test_scan_leaves_an_empty_ring_to_numpy() -> None:
+    """The kernel would read an empty ring's first vertex: the numpy scan decides."""
+    square = (np.array([0.0, 8.0, 8.0, 0.0]), np.array([0.0, 0.0, 4.0, 4.0]))
+    rings = [square, (np.empty(0), np.empty(0))]
+    # What a caller gets is the numpy code's answer (here its exception).
+    with pytest.raises(IndexError) as numpy_error:
+        scan_cells_numpy(rings, 4.0, 2.0)
+    with pytest.raises(type(numpy_error.value)):
+        _scan_cells(rings, 4.0, 2.0)
+
+
+def test_heading_scores_in_blocks_compiled_equal_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    """score_headings over several blocks (the scratch reused, the last block shorter)."""
+    t = np.linspace(0.0, 2.0 * np.pi, 1500, endpoint=False)
+    radius = 100.0 + 7.0 * np.sin(37.0 * t)
+    hole = Polygon([(-20, -20), (20, -20), (20, 20), (-20, 20)])
+    field = Polygon(
+        np.column_stack([radius * np.cos(t), radius * np.sin(t)]), [hole.exterior.coords]
+    )
+    field = shapely.orient_polygons(field)
+    headings_deg = np.arange(0.0, 180.0, 0.7)
+    vertices = len(field.exterior.coords) - 1 + 4
+    block = max(1, heading_search._BLOCK_VALUES // vertices)
+    assert len(headings_deg) > block and len(headings_deg) % block != 0  # a shorter last block
+    fast = heading_search.score_headings([field], headings_deg, 4.0)
+    monkeypatch.setattr(heading_search, "_score_block", heading_search._score_block_numpy)
+    slow = heading_search.score_headings([field], headings_deg, 4.0)
+    for name in ("working_m", "missed_m2", "turns_m"):
+        assert same_bits(getattr(fast, name), getattr(slow, name)), name
+    for name in ("pieces", "turn_backs"):
+        assert np.array_equal(getattr(fast, name), getattr(slow, name)), name
+    assert fast.exteriors == slow.exteriors
+
+
+def nan_problems(seed: int, count: int) -> list[_Problem]:
+    """Ordering problems with NaN costs (and inf): np.min's and np.argmin's NaN rules."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(count):
+        m = int(rng.integers(2, 12))
+        move = rng.uniform(0.0, 100.0, (m, 4, m, 4))
+        first, last, inner = (rng.uniform(0.0, 50.0, (m, 4)) for _ in range(3))
+        if k % 2 == 0:
+            move, first, last, inner = (np.round(a) for a in (move, first, last, inner))
+        move[rng.uniform(size=move.shape) < 0.05] = np.inf
+        share = (0.02, 0.2, 1.0)[k % 3]  # a few NaNs, many, every move
+        move[rng.uniform(size=move.shape) < share] = np.nan
+        if k % 4 == 1:
+            first[rng.uniform(size=first.shape) < 0.3] = np.nan
+        if k % 4 == 2:
+            last[rng.uniform(size=last.shape) < 0.3] = np.nan
+        if k % 4 == 3:
+            inner[rng.uniform(size=inner.shape) < 0.3] = np.nan
+        out.append(_Problem(move, first, last, inner))
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_order_searches_with_nan_costs_compiled_equal_numpy(seed: int) -> None:
+    rng = np.random.default_rng(600 + seed)
+    for problem in nan_problems(seed, 40):
+        assert_same_searches(problem, rng)

@@ -171,3 +171,22 @@ def test_kernels_equal_numpy_on_real_fields(vehicle: str, monkeypatch: pytest.Mo
         assert same_chains(convex_chains(u, v), convex_chains_numpy(u, v))
     for args in calls:
         assert_same_laid_out(laid_out(*args), coverage._laid_out_numpy(*args))  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("short", ["v_lo", "v_hi"])
+def test_laid_out_kernel_leaves_short_lines_to_numpy(short: str) -> None:
+    """``v_lo``/``v_hi`` shorter than ``u``: the kernel would read past them, numpy decides."""
+    chains = convex_chains(np.array([0.0, 8.0, 8.0, 0.0]), np.array([0.0, 0.0, 4.0, 4.0]))
+    offsets, u = np.array([0, 2]), np.array([2.0, 6.0])
+    lo, hi = np.zeros(2), np.full(2, 4.0)
+    if short == "v_lo":
+        lo = np.empty(0)
+    else:
+        hi = np.empty(0)
+    packed = coverage._packed(chains)
+    assert coverage_kernels.laid_out(packed, offsets, u, lo, hi, 4.0) is None
+    # What a caller gets is the numpy code's answer (here its exception).
+    with pytest.raises(IndexError) as numpy_error:
+        coverage._laid_out_numpy([chains], offsets, u, lo, hi, 4.0)
+    with pytest.raises(type(numpy_error.value)):
+        coverage._laid_out([chains], offsets, u, lo, hi, 4.0)

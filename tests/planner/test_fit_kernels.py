@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -281,3 +282,23 @@ def test_driving_time_kernel_equals_numpy(
         xy[:, 0], xy[:, 1], speed_mps=speed_mps, turn_rate_dps=rate_dps
     )
     assert same_bits(np.array([slow]), np.array([fast]))
+
+
+@pytest.mark.parametrize("empty", ["lo", "hi"])
+def test_turn_fitting_kernel_leaves_an_empty_chain_to_numpy(empty: str) -> None:
+    """The kernel would read ``hi_u[0]``/``lo_u[-1]`` past an empty chain: numpy decides."""
+    full, none = np.array([0.0, 1.0, 2.0]), np.empty(0)
+    lo_u, lo_v = (none, none) if empty == "lo" else (full, np.zeros(3))
+    hi_u, hi_v = (none, none) if empty == "hi" else (full, np.full(3, 5.0))
+    machine = Chains(lo_u, lo_v, hi_u, hi_v)
+    xy = np.array([[0.5, 4.0], [1.0, 5.5], [1.5, 4.0]])
+    curves = TurnCurves(xy, np.array([0, 3]), np.array([3.0]), np.array([math.pi]), 1.0)
+    top = np.array([True])
+    c, off = machine, curves.offsets
+    assert fit_kernels.fit_turns(xy, off, top, c.lo_u, c.lo_v, c.hi_u, c.hi_v, 1e-6) is None
+    # What a caller gets is the numpy code's answer: np.interp refuses an empty chain.
+    with pytest.raises(ValueError, match="empty"):
+        line_ends._fitted_numpy(curves, top, machine)
+    lines = SimpleNamespace(u=np.zeros(2), up=np.array([True, False]))
+    with pytest.raises(ValueError, match="empty"):
+        line_ends._fit_turns(np.array([0]), np.array([1]), lines, machine, None, curves)  # type: ignore[arg-type]
