@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit, _left, _right
+from planner.kernels import _jit, _left, _line_count, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -31,7 +31,6 @@ BoolArray = npt.NDArray[np.bool_]
 
 _SNAP_M = 1e-6  # planner.decomposition._SNAP_M
 _REPEAT_M = 1e-9  # planner.decomposition._drop_repeats
-_COUNT_EPS = 1e-9  # planner.lines._COUNT_EPS
 
 
 @_jit
@@ -365,7 +364,7 @@ def _scan(
                 hi = u1[i]
         width = hi - lo
         w = width - 2.0 * edge + d
-        n[c] = 1 if w <= d else int(np.ceil((w - d) / d - _COUNT_EPS)) + 1
+        n[c] = _line_count(w, d)
         if width - 2.0 * edge <= 0.0:
             first[c] = (lo + hi) / 2.0
             last[c] = first[c]

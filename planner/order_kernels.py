@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit
+from planner.kernels import _jit, _mn
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -62,24 +62,16 @@ def _order_costs(
             for j in range(4):
                 best = here[0] + _move(move, exits, entries, a, 0, b, j)
                 for i in range(1, 4):
-                    best = _min_nan(best, here[i] + _move(move, exits, entries, a, i, b, j))
+                    best = _mn(best, here[i] + _move(move, exits, entries, a, i, b, j))
                 after[j] = best + inner[b, j]
             for j in range(4):
                 here[j] = after[j]
         c = orders[k, n - 1]
         best = here[0] + last[c, 0]
         for j in range(1, 4):
-            best = _min_nan(best, here[j] + last[c, j])
+            best = _mn(best, here[j] + last[c, j])
         out[k] = best
     return out
-
-
-@_jit
-def _min_nan(best: float, x: float) -> float:
-    """One step of ``np.min``: NaN wins, else the smaller."""
-    if best != best:
-        return best
-    return x if (x < best or x != x) else best
 
 
 @_jit
@@ -138,7 +130,7 @@ def _order_greedy(
     for c in range(m):
         row_min = first[c, 0]
         for j in range(1, 4):
-            row_min = _min_nan(row_min, first[c, j])
+            row_min = _mn(row_min, first[c, j])
         if c == 0 or (best == best and (row_min < best or row_min != row_min)):
             best, current = row_min, c
     w_here = 0
