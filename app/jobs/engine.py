@@ -49,9 +49,47 @@ QUIET_CLUSTER: Final[dict[str, object]] = {
 }
 
 
-def start_local_cluster(n_workers: int) -> LocalCluster:
+#: The local cluster's workers are forked from the process's fork server, which has loaded the
+#: planner (:mod:`app.preload`), rather than spawned as fresh interpreters. A worker that a
+#: nanny restarts later is spawned (this setting applies while the cluster starts) and loads
+#: the kernels through :class:`app.jobs.kernels_plugin.KernelWarmUp`.
+FORKED_WORKERS: Final[dict[str, object]] = {
+    "distributed.worker.multiprocessing-method": "forkserver"
+}
+#: The module the fork server imports before it forks any child.
+PRELOAD: Final = "app.preload"
+
+
+def _preload_forkserver() -> None:
+    """Add :data:`PRELOAD` to the fork server's preload, after Dask's own modules.
+
+    Takes effect when the fork server starts (the first child this process forks); one
+    already running (started by :mod:`app.budget`, which preloads the same module) keeps what
+    it has.
+    """
+    from multiprocessing import forkserver
+
+    from distributed.utils import get_mp_context
+
+    context = get_mp_context()  # sets Dask's preload list (distributed, numpy, …) once
+    preload = list(getattr(forkserver._forkserver, "_preload_modules", []))
+    if PRELOAD not in preload:
+        context.set_forkserver_preload([*preload, PRELOAD])
+
+
+def start_local_cluster(n_workers: int, *, forked: bool = True) -> LocalCluster:
     """Start a local Dask cluster of ``n_workers`` single-threaded worker processes.
 
+    Parameters
+    ----------
+    n_workers : int
+    forked : bool
+        Fork the workers from a server process that has loaded the planner
+        (:data:`FORKED_WORKERS`); False spawns fresh interpreters, which load it on their
+        first task, as workers started by ``dask worker`` on other machines do.
+
+    Notes
+    -----
     No dashboard (it would need bokeh); the scheduler's small HTTP server (health, metrics)
     listens on a free loopback port rather than 8787, which another cluster may hold. Worker
     logs at warning level.
@@ -65,8 +103,11 @@ def start_local_cluster(n_workers: int) -> LocalCluster:
     import dask
     from distributed import LocalCluster
 
+    method = FORKED_WORKERS if forked else {"distributed.worker.multiprocessing-method": "spawn"}
     # The nannies copy the configuration when they are made: their workers inherit it.
-    with dask.config.set(QUIET_CLUSTER):
+    with dask.config.set(QUIET_CLUSTER), dask.config.set(method):
+        if forked:
+            _preload_forkserver()
         return LocalCluster(
             n_workers=n_workers,
             threads_per_worker=1,

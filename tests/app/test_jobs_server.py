@@ -78,11 +78,13 @@ def test_the_local_cluster_starts_and_stops_with_the_server(
     with running_server(f"sqlite:///{tmp_path / 'cluster.db'}") as base:
         assert call(base, "/api/health")[0] == 200
         # The cluster starts in the background: the server and, soon, its two worker
-        # processes (the nannies live in the server).
+        # processes (the nannies live in the server), forked by a forkserver that has
+        # loaded the planner (app.preload).
         deadline = time.monotonic() + 60
         while True:
             started = [p for p in me.children(recursive=True) if p.pid not in before]
-            workers = [p for p in started if "spawn_main" in " ".join(p.cmdline())]
+            forkservers = [p for p in started if "forkserver" in " ".join(p.cmdline())]
+            workers = [c for f in forkservers for c in f.children()]
             if len(workers) >= 2 or time.monotonic() > deadline:
                 break
             time.sleep(0.2)
