@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -91,3 +92,14 @@ def test_sorts_without_allocating_equal_numpy(n: int) -> None:
         order = np.full(n + 3, -1, dtype=np.int64)
         kernels._stable_order_into(keys, n, order)
         assert order[:n].tolist() == np.argsort(keys[:n], kind="mergesort").tolist()
+
+
+def test_numpy_calls_the_c_librarys_elementary_functions() -> None:
+    """The kernel tests' premise (``tests/numpy_env.py``): numpy's arctan2, arccos and exp give
+    the C library's bits, as the compiled kernels do. Fails if numpy loaded before the plugin
+    could turn its own AVX-512 functions off."""
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-10.0, 10.0, (2, 2000))
+    assert np.array_equal(np.arctan2(y, x), [math.atan2(b, a) for a, b in zip(x, y, strict=True)])
+    assert np.array_equal(np.arccos(x / 10.0), [math.acos(a / 10.0) for a in x])
+    assert np.array_equal(np.exp(x), [math.exp(a) for a in x])
