@@ -19,6 +19,7 @@ from typing import Any, Final
 from shapely import Polygon
 
 import planner
+from app.forkserver import preloaded_context
 from planner import CoveragePlan, PlannerError
 
 #: Fields up to this many vertices (exterior and holes) are planned in the request's thread.
@@ -26,9 +27,9 @@ INLINE_MAX_VERTICES: Final = 400
 #: Fields with up to this many holes are planned in the request's thread.
 INLINE_MAX_HOLES: Final = 10
 
-_context = multiprocessing.get_context("forkserver")
-# app.preload loads the compiled kernels, so that no child pays for it out of its budget.
-_context.set_forkserver_preload(["planner", "app.preload"])
+# The fork server loads the planner's compiled kernels, so that no child pays for them out of
+# its budget.
+_context = preloaded_context()
 
 
 def _nothing() -> None:

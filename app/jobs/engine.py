@@ -49,32 +49,28 @@ QUIET_CLUSTER: Final[dict[str, object]] = {
 }
 
 
-#: The local cluster's workers are forked from the process's fork server, which has loaded the
-#: planner (:mod:`app.preload`), rather than spawned as fresh interpreters. A worker that a
-#: nanny restarts later is spawned (this setting applies while the cluster starts) and loads
-#: the kernels through :class:`app.jobs.kernels_plugin.KernelWarmUp`.
+#: The local cluster's workers are forked from the process's fork server, which has loaded
+#: Dask and the planner (:mod:`app.forkserver`), rather than spawned as fresh interpreters. A
+#: worker that a nanny restarts later is spawned (this setting applies while the cluster
+#: starts) and loads the kernels through :class:`app.jobs.kernels_plugin.KernelWarmUp`.
 FORKED_WORKERS: Final[dict[str, object]] = {
     "distributed.worker.multiprocessing-method": "forkserver"
 }
-#: The module the fork server imports before it forks any child.
-PRELOAD: Final = "app.preload"
 
 
 def _preload_forkserver() -> None:
-    """Add :data:`PRELOAD` to the fork server's preload, after Dask's own modules.
+    """Set the fork server's preload (:data:`app.forkserver.PRELOAD`), after Dask set its own.
 
-    Takes effect when the fork server starts (the first child this process forks); one
-    already running (started by :mod:`app.budget`, which preloads the same module) keeps what
-    it has.
+    Dask sets its list (distributed, numpy, …) the first time it asks for the context; ours
+    loads Dask and the planner. Takes effect when the fork server starts (the first child this
+    process forks); one already running (as :mod:`app.budget` starts it) keeps what it has.
     """
-    from multiprocessing import forkserver
-
     from distributed.utils import get_mp_context
 
-    context = get_mp_context()  # sets Dask's preload list (distributed, numpy, …) once
-    preload = list(getattr(forkserver._forkserver, "_preload_modules", []))
-    if PRELOAD not in preload:
-        context.set_forkserver_preload([*preload, PRELOAD])
+    from app.forkserver import preloaded_context
+
+    get_mp_context()
+    preloaded_context()
 
 
 def start_local_cluster(n_workers: int, *, forked: bool = True) -> LocalCluster:
