@@ -6,6 +6,6 @@ planning budget on ``import numba`` and the disk cache (:mod:`planner.kernels`).
 module is its whole purpose; nothing else should import it.
 """
 
-from planner import kernels
+from planner.warm_up import warm_up
 
-kernels.warm_up()
+warm_up()

@@ -84,13 +84,13 @@ def started_cluster(workers: int, *, kernels_loaded: bool) -> LocalCluster:
     """
     from distributed import Client
 
-    from planner import kernels
+    from planner.warm_up import warm_up
 
     cluster = start_local_cluster(workers)
     if kernels_loaded:
         with Client(cluster.scheduler_address, set_as_default=False) as client:
             client.wait_for_workers(workers)
-            client.run(kernels.warm_up)
+            client.run(warm_up)
     return cluster
 
 

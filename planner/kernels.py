@@ -565,25 +565,12 @@ def length_aggregates(
 
 
 def warm_up() -> None:
-    """Compile the kernels, or load them from the disk cache, on a tiny ring.
+    """Compile this module's kernels, or load them from the disk cache, on a tiny ring.
 
-    For an image build (fill ``NUMBA_CACHE_DIR``) or a worker before its first plan: the
-    first call in a process with a cold cache compiles for seconds.
+    Only these: :func:`planner.warm_up.warm_up` warms every kernel module's (this module
+    is the one the others import, so it imports none of them).
     """
     ring_u = np.array([[0.0, 2.0, 2.0, 0.0]])
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
     coverage_excess(ring_u, ring_v, 1.0)
     length_aggregates(ring_u, ring_v, 1.0)
-    from planner import (  # the other modules' loops
-        cell_kernels,
-        coverage_kernels,
-        edge_kernels,
-        fit_kernels,
-        order_kernels,
-    )
-
-    fit_kernels.warm_up()
-    coverage_kernels.warm_up()
-    cell_kernels.warm_up()
-    order_kernels.warm_up()
-    edge_kernels.warm_up()

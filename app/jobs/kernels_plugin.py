@@ -19,13 +19,13 @@ NAME: Final = "tillpath-planner-kernels"
 
 
 def _warm_up() -> None:
-    from planner import kernels
+    from planner.warm_up import warm_up
 
-    kernels.warm_up()
+    warm_up()
 
 
 class KernelWarmUp(WorkerPlugin):
-    """Load :mod:`planner.kernels` in a background thread when a worker starts."""
+    """Load every planner kernel (:mod:`planner.warm_up`) in a thread when a worker starts."""
 
     name = NAME
 
