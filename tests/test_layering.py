@@ -63,3 +63,20 @@ def test_base_modules_import_nothing_of_their_package(relative: str) -> None:
             names = []
         for name in names:
             assert name.split(".")[0] != package, f"{relative} imports {name}"
+
+
+BENCHES = sorted((ROOT / "bench").rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", BENCHES, ids=[str(p.relative_to(ROOT)) for p in BENCHES])
+def test_benches_import_no_tests(path: Path) -> None:
+    """What a bench shares with the tests lives in ``bench/`` (``bench.shapes``), not ``tests/``."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            names = [node.module or ""]
+        else:
+            names = []
+        for name in names:
+            assert name.split(".")[0] != "tests", f"{path} imports {name}"
