@@ -119,16 +119,19 @@ def score_terms(
     nxt: FloatArray,
     cos_t: FloatArray,
     sin_t: FloatArray,
-    d: float,
+    interval_m: float,
     scratch: FloatArray,
 ) -> None:
     """Write the per-edge terms of a block of headings into ``scratch[:5, :rows]``.
 
-    ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones; ``cos_t``, ``sin_t``
-    (rows,): the headings' (numpy's) cosines and sines; ``scratch`` C-contiguous, at least
-    (5, rows, n). Compiled: see ``_score_terms``.
+    ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones [m]; ``cos_t``,
+    ``sin_t`` (rows,): the headings' (numpy's) cosines and sines; ``interval_m``: the line
+    spacing [m]; ``scratch`` C-contiguous, at least (5, rows, n). Compiled: see
+    ``_score_terms``.
     """
-    _score_terms(np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, d, scratch)
+    _score_terms(
+        np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, interval_m, scratch
+    )
 
 
 def warm_up() -> None:

@@ -534,30 +534,38 @@ def _length_aggregates(
         out[8, h], out[9, h], out[10, h] = p_last, v_last[0], v_last[1]
 
 
-def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float) -> FloatArray | None:
-    """Missed area per heading, or None where the numpy code must decide (see module doc)."""
+def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, interval_m: float) -> FloatArray | None:
+    """Missed area per heading [m²], or None where the numpy code must decide (module doc).
+
+    ``u_raw``, ``v_ring``: the ring in each heading's sweep frame [m]; ``interval_m``: the
+    line spacing [m].
+    """
     if u_raw.size == 0:  # no heading or no vertex: the kernel reads no bounds
         return None
     out = np.empty(len(u_raw))
     ok = _coverage_excess(
         np.ascontiguousarray(u_raw, dtype=np.float64),
         np.ascontiguousarray(v_ring, dtype=np.float64),
-        float(d),
+        float(interval_m),
         out,
     )
     return out if ok else None
 
 
 def length_aggregates(
-    u_ring: FloatArray, v_ring: FloatArray, d: float
+    u_ring: FloatArray, v_ring: FloatArray, interval_m: float
 ) -> tuple[IntArray, FloatArray]:
-    """Lines per heading and the 11 rows of aggregates (see ``_length_aggregates``)."""
+    """Lines per heading and the 11 rows of aggregates (see ``_length_aggregates``).
+
+    ``u_ring``, ``v_ring``: the ring in each heading's sweep frame [m]; ``interval_m``: the
+    line spacing [m].
+    """
     counts = np.empty(len(u_ring), dtype=np.int64)
     out = np.empty((11, len(u_ring)))
     _length_aggregates(
         np.ascontiguousarray(u_ring, dtype=np.float64),
         np.ascontiguousarray(v_ring, dtype=np.float64),
-        float(d),
+        float(interval_m),
         counts,
         out,
     )
