@@ -50,7 +50,7 @@ USER tillpath
 # a generic target, so that the image's cache serves whatever machine runs it (no fastmath,
 # so the same arithmetic; the code is a little slower than one built for the host).
 ENV NUMBA_CACHE_DIR=/app/numba-cache NUMBA_CPU_NAME=generic
-RUN python -c "from planner.kernels import warm_up; warm_up()"
+RUN python -c "from planner.warm_up import warm_up; warm_up()"
 
 EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=30s --retries=3 \

@@ -17,7 +17,7 @@ $(BIN)/.installed: pyproject.toml requirements.lock
 	$(BIN)/python -m pip install --quiet -r requirements.lock
 	$(BIN)/python -m pip install --quiet --no-deps -e .
 	@echo "compiling the planner's numba kernels into planner/__pycache__ (once, about a minute)"
-	$(BIN)/python -c "from planner.kernels import warm_up; warm_up()"
+	$(BIN)/python -c "from planner.warm_up import warm_up; warm_up()"
 	touch $@
 
 $(BIN)/.installed-dev: $(BIN)/.installed requirements-dev.lock

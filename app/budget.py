@@ -37,7 +37,7 @@ def _nothing() -> None:
 
 
 def _warm_up() -> None:
-    from planner import kernels
+    from planner.warm_up import warm_up as warm_up_kernels
 
     # The fork server first, and this process's kernels once it is ready: with a cold numba
     # cache the fork server compiles them (about 9 s of CPU, once per install) and this
@@ -46,7 +46,7 @@ def _warm_up() -> None:
     child.start()
     child.join()
     child.close()
-    kernels.warm_up()
+    warm_up_kernels()
 
 
 def warm_up() -> threading.Thread:

@@ -17,6 +17,6 @@ loads: no thread, socket, database connection or file stays open across the fork
 """
 
 import app.cli.batch_tasks  # noqa: F401  (plan-batch's task)
-from planner import kernels
+from planner.warm_up import warm_up
 
-kernels.warm_up()
+warm_up()

@@ -59,6 +59,29 @@ class Load:
     requests: int = 0
 
 
+def served_settings(app: object) -> Settings:
+    """Return the settings the served app was made with, else the environment's.
+
+    ``create_app(settings)`` keeps them in ``app.state.settings`` (as
+    :func:`app.dependencies.request_settings` reads them); uvicorn wraps the app in its own
+    middleware (``ProxyHeadersMiddleware`` and the like), each keeping the app it wraps in
+    ``.app``, so the chain is followed down to it. An app that keeps no settings (not made by
+    :func:`app.main.create_app`, as :func:`probe`'s) is served with the environment's.
+    """
+    for _ in range(_MAX_WRAPPERS):
+        settings = getattr(getattr(app, "state", None), "settings", None)
+        if isinstance(settings, Settings):
+            return settings
+        app = getattr(app, "app", None)
+        if app is None:
+            break
+    return get_settings()
+
+
+#: How many ASGI wrappers :func:`served_settings` looks through (uvicorn adds at most three).
+_MAX_WRAPPERS: Final = 8
+
+
 class GuardedH11Protocol(H11Protocol):
     """uvicorn's h11 protocol with read timeouts and a connection limit (see the module doc)."""
 
@@ -67,16 +90,16 @@ class GuardedH11Protocol(H11Protocol):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        settings = get_settings()
-        self._header_timeout_s = settings.header_timeout_s
-        self._body_idle_timeout_s = settings.body_idle_timeout_s
-        self._limit = settings.limit_concurrency
         app = getattr(self, "app", None)
         if not callable(app):
             raise UvicornChangedError(
                 f"uvicorn {uvicorn.__version__}: H11Protocol keeps no ASGI app in .app; "
                 f"app.serving was written for uvicorn {TESTED_UVICORN}"
             )
+        settings = served_settings(app)
+        self._header_timeout_s = settings.header_timeout_s
+        self._body_idle_timeout_s = settings.body_idle_timeout_s
+        self._limit = settings.limit_concurrency
         self._app: ASGIApp = app
         self.app = self._guarded  # uvicorn calls this for every request
         self._guard_transport: asyncio.BaseTransport | None = None

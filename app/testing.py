@@ -298,9 +298,9 @@ def warm_kernel_cache() -> None:
     CPU, :mod:`planner.kernels`), and a server or CLI started by a test would do it while the
     test's timeouts run. Compiled here once, they load from the cache in every process after.
     """
-    from planner import kernels
+    from planner.warm_up import warm_up
 
-    kernels.warm_up()
+    warm_up()
 
 
 def _wait_for_health(

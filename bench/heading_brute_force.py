@@ -1,7 +1,7 @@
 """How far the convex heading search is from a 0.1° brute force (issue 9 item 5).
 
 ``python -m bench.heading_brute_force [FIELDS]`` plans each of a fixed set of random convex
-fields (``tests.planner.random_fields.random_convex_jobs``) once with the heading searched
+fields (:func:`bench.shapes.random_convex_jobs`) once with the heading searched
 and 1,800 times at a fixed heading, every 0.1°. Coverage first (R5): only the fixed headings
 within 0.2 pp of the best fixed coverage count; the best of them by path length is the brute
 force. The excess is the searched plan's ``path_length_m`` over that best, in per cent; the
@@ -16,11 +16,10 @@ import time
 
 import numpy as np
 
+from bench.shapes import fixed_heading_figures, random_convex_jobs
 from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK
 from planner.errors import PlannerError
-from tests.planner.plan_checks import fixed_heading_figures
-from tests.planner.random_fields import random_convex_jobs
 
 #: The 0.1° grid of fixed headings [deg].
 GRID_DEG = np.round(np.arange(0.0, 180.0, 0.1), 1)

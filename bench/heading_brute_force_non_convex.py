@@ -23,18 +23,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bench.shapes import LOSS_SHARE, NON_CONVEX_CASES, field_from_local, star_field
 from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK
-from tests.conftest import field_from_local
-from tests.planner.random_fields import star_field
-from tests.planner.test_heading_rule_non_convex import CASES, LOSS_SHARE
 
 #: The 1° grid of fixed headings [deg].
 GRID_DEG = np.arange(0.0, 180.0, 1.0)
 #: The searched plan may be this much longer than the brute force (the test's LOSS_SHARE) [%].
 LOSS_PCT = LOSS_SHARE * 100.0
 #: The test file's cases: (vertices, seed, size [m], holes asked for, interval [m]).
-TEST_CASES = [tuple(case.values) for case in CASES]
+TEST_CASES = list(NON_CONVEX_CASES.values())
 
 
 @dataclass(frozen=True, slots=True)

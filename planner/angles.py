@@ -446,10 +446,18 @@ def _objective_key(least: FloatArray, counts: IntArray, objective: Objective) ->
     ``least``: :func:`_least` of :func:`tied_lengths`; rounding is monotone, so it is the
     least length per heading, rounded.
     """
-    key = np.where(counts <= MAX_LINES, least, np.inf)
+    return objective_key(np.where(counts <= MAX_LINES, least, np.inf), counts, objective)
+
+
+def objective_key(lengths_m: FloatArray, counts: IntArray, objective: Objective) -> FloatArray:
+    """Return what ``objective`` ranks headings by: line count first, then length.
+
+    ``lengths_m``: each heading's path length [m]; ``counts``: its line count. One number
+    per heading (a line outweighs any length, 1e12 m), so that one ``<`` compares both.
+    """
     if objective == "fewest_lines":
-        key = key + counts * 1e12
-    return np.asarray(key)
+        return np.asarray(lengths_m + counts * 1e12)
+    return np.asarray(lengths_m)
 
 
 def _seeds(

@@ -376,12 +376,13 @@ def laid_out(
     u: FloatArray,
     v_lo: FloatArray,
     v_hi: FloatArray,
-    d: float,
+    interval_m: float,
 ) -> tuple[IntArray, FloatArray, IntArray] | None:
     """Return ``coverage._laid_out``'s odd cells, pieces' areas and pieces' cells (or None).
 
     ``packed``: each cell's ``Chains.packed`` in turn. ``offsets`` must start at 0 and end at
-    ``len(u)``; ``v_lo`` and ``v_hi`` as long as ``u`` (else None: the numpy code decides).
+    ``len(u)``; ``v_lo`` and ``v_hi`` as long as ``u`` (else None: the numpy code decides);
+    ``interval_m`` the line spacing [m].
     """
     if not len(v_lo) == len(v_hi) == len(u):
         return None
@@ -391,7 +392,7 @@ def laid_out(
         np.ascontiguousarray(u, dtype=np.float64),
         np.ascontiguousarray(v_lo, dtype=np.float64),
         np.ascontiguousarray(v_hi, dtype=np.float64),
-        float(d),
+        float(interval_m),
     )
     return (odd, area, cell) if ok else None
 

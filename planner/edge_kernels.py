@@ -4,7 +4,7 @@ Two per-vertex computations that numpy does on whole arrays of a few hundred ver
 few µs a call: the heading search's per-edge score terms
 (:func:`planner.heading_search._score_block`, before its sums) at every heading of a block,
 and the router's test of whether the line through two corners is tangent at both
-(:class:`planner.routing.FieldRouter`, for every pair of corners). These kernels do the same
+(:class:`planner.visibility.CornerVisibility`, for every pair of corners). These kernels do the same
 computations in loops, compiled by numba: every value is computed by the same operations in
 the same order (``np.minimum`` and ``np.maximum`` keep their NaN rules), so the scores and the
 routes, and so the plans, are the same to the last bit. The rotation's ``sin``/``cos`` and the
@@ -32,7 +32,7 @@ BoolArray = npt.NDArray[np.bool_]
 def _tangent_pairs(
     xy: FloatArray, around: FloatArray, i: IntArray, j: IntArray, collinear: float
 ) -> BoolArray:
-    """``planner.routing.FieldRouter._tangent_pairs``: one pair at a time."""
+    """``planner.visibility.CornerVisibility.tangent``: one pair at a time."""
     out = np.empty(len(i), dtype=np.bool_)
     for k in range(len(i)):
         a, b = i[k], j[k]
@@ -58,7 +58,7 @@ def tangent_pairs(
 ) -> BoolArray:
     """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both, compiled.
 
-    ``xy`` (2, n) and ``around`` (4, n) as :class:`planner.routing.FieldRouter` keeps them.
+    ``xy`` (2, n) and ``around`` (4, n) as :class:`planner.visibility.CornerVisibility` keeps them.
     """
     return _tangent_pairs(
         xy,
@@ -119,16 +119,19 @@ def score_terms(
     nxt: FloatArray,
     cos_t: FloatArray,
     sin_t: FloatArray,
-    d: float,
+    interval_m: float,
     scratch: FloatArray,
 ) -> None:
     """Write the per-edge terms of a block of headings into ``scratch[:5, :rows]``.
 
-    ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones; ``cos_t``, ``sin_t``
-    (rows,): the headings' (numpy's) cosines and sines; ``scratch`` C-contiguous, at least
-    (5, rows, n). Compiled: see ``_score_terms``.
+    ``xy`` and ``nxt`` (n, 2): every ring's vertices and their next ones [m]; ``cos_t``,
+    ``sin_t`` (rows,): the headings' (numpy's) cosines and sines; ``interval_m``: the line
+    spacing [m]; ``scratch`` C-contiguous, at least (5, rows, n). Compiled: see
+    ``_score_terms``.
     """
-    _score_terms(np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, d, scratch)
+    _score_terms(
+        np.ascontiguousarray(xy), np.ascontiguousarray(nxt), cos_t, sin_t, interval_m, scratch
+    )
 
 
 def warm_up() -> None:

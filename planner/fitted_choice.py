@@ -28,6 +28,7 @@ from planner.angles import (
     HeadingChoice,
     LengthScorer,
     candidate_headings,
+    objective_key,
     tied_lengths,
 )
 from planner.convex_fits import convex_machine_area, fit_headings
@@ -292,7 +293,7 @@ def choose_convex(
             # Only those the scorer ranks shorter than the choice can be shorter fitted.
             scores, counts = lengths_of(np.append(around, picked.heading_deg))
             tied = tied_lengths(scores)
-            key = _scored_key(tied.min(axis=1), counts, objective)
+            key = objective_key(tied.min(axis=1), counts, objective)
             shorter = key[:-1] < key[-1]
             if not shorter.any():
                 break
@@ -378,7 +379,7 @@ def _near_misses(
         return []
     assert choice.scored_headings is not None and choice.scored_coverage is not None
     assert choice.scored_variants is not None
-    key = _scored_key(choice.scored_lengths, choice.scored_line_counts, objective)
+    key = objective_key(choice.scored_lengths, choice.scored_line_counts, objective)
     at = np.nonzero(choice.scored_headings == choice.heading_deg)[0]
     if len(at) == 0:
         return []
@@ -394,15 +395,6 @@ def _near_misses(
             strict=True,
         )
     )
-
-
-def _scored_key(
-    lengths_m: FloatArray, line_counts: npt.NDArray[np.int64], objective: Objective
-) -> FloatArray:
-    """Return what the objective ranks by, from the scorer's lengths: line count first."""
-    if objective == "fewest_lines":
-        return np.asarray(lengths_m + line_counts * 1e12)
-    return lengths_m
 
 
 def _doubtful_alternatives(

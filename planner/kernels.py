@@ -534,30 +534,38 @@ def _length_aggregates(
         out[8, h], out[9, h], out[10, h] = p_last, v_last[0], v_last[1]
 
 
-def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float) -> FloatArray | None:
-    """Missed area per heading, or None where the numpy code must decide (see module doc)."""
+def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, interval_m: float) -> FloatArray | None:
+    """Missed area per heading [m²], or None where the numpy code must decide (module doc).
+
+    ``u_raw``, ``v_ring``: the ring in each heading's sweep frame [m]; ``interval_m``: the
+    line spacing [m].
+    """
     if u_raw.size == 0:  # no heading or no vertex: the kernel reads no bounds
         return None
     out = np.empty(len(u_raw))
     ok = _coverage_excess(
         np.ascontiguousarray(u_raw, dtype=np.float64),
         np.ascontiguousarray(v_ring, dtype=np.float64),
-        float(d),
+        float(interval_m),
         out,
     )
     return out if ok else None
 
 
 def length_aggregates(
-    u_ring: FloatArray, v_ring: FloatArray, d: float
+    u_ring: FloatArray, v_ring: FloatArray, interval_m: float
 ) -> tuple[IntArray, FloatArray]:
-    """Lines per heading and the 11 rows of aggregates (see ``_length_aggregates``)."""
+    """Lines per heading and the 11 rows of aggregates (see ``_length_aggregates``).
+
+    ``u_ring``, ``v_ring``: the ring in each heading's sweep frame [m]; ``interval_m``: the
+    line spacing [m].
+    """
     counts = np.empty(len(u_ring), dtype=np.int64)
     out = np.empty((11, len(u_ring)))
     _length_aggregates(
         np.ascontiguousarray(u_ring, dtype=np.float64),
         np.ascontiguousarray(v_ring, dtype=np.float64),
-        float(d),
+        float(interval_m),
         counts,
         out,
     )
@@ -565,25 +573,12 @@ def length_aggregates(
 
 
 def warm_up() -> None:
-    """Compile the kernels, or load them from the disk cache, on a tiny ring.
+    """Compile this module's kernels, or load them from the disk cache, on a tiny ring.
 
-    For an image build (fill ``NUMBA_CACHE_DIR``) or a worker before its first plan: the
-    first call in a process with a cold cache compiles for seconds.
+    Only these: :func:`planner.warm_up.warm_up` warms every kernel module's (this module
+    is the one the others import, so it imports none of them).
     """
     ring_u = np.array([[0.0, 2.0, 2.0, 0.0]])
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
     coverage_excess(ring_u, ring_v, 1.0)
     length_aggregates(ring_u, ring_v, 1.0)
-    from planner import (  # the other modules' loops
-        cell_kernels,
-        coverage_kernels,
-        edge_kernels,
-        fit_kernels,
-        order_kernels,
-    )
-
-    fit_kernels.warm_up()
-    coverage_kernels.warm_up()
-    cell_kernels.warm_up()
-    order_kernels.warm_up()
-    edge_kernels.warm_up()

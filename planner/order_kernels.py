@@ -170,41 +170,45 @@ def _writable(a: IntArray) -> IntArray:
 
 
 def order_costs(
-    move: FloatArray,
+    move_m: FloatArray,
     exits: FloatArray,
     entries: FloatArray,
-    first: FloatArray,
-    last: FloatArray,
-    inner: FloatArray,
+    first_m: FloatArray,
+    last_m: FloatArray,
+    inner_m: FloatArray,
     orders: IntArray,
 ) -> FloatArray:
-    """Route length of the best variants of each of ``orders`` (K, m), compiled.
+    """Route length [m] of the best variants of each of ``orders`` (K, m), compiled.
 
-    ``move`` is (m, 4, m, 4), or (0, 4, 0, 4) for straight moves from ``exits`` to
-    ``entries`` (m, 4, 2); ``first``, ``last`` and ``inner`` are (m, 4); all float64 and
-    C-contiguous (:class:`planner.cell_order._Problem`).
+    ``move_m`` is (m, 4, m, 4), or (0, 4, 0, 4) for straight moves from ``exits`` to
+    ``entries`` (m, 4, 2) [m]; ``first_m``, ``last_m`` and ``inner_m`` are (m, 4); all float64
+    and C-contiguous (:class:`planner.cell_order._Problem`), lengths and points in metres.
     """
-    return _order_costs(move, exits, entries, first, last, inner, _writable(orders))
+    return _order_costs(move_m, exits, entries, first_m, last_m, inner_m, _writable(orders))
 
 
 def order_variants(
-    move: FloatArray,
+    move_m: FloatArray,
     exits: FloatArray,
     entries: FloatArray,
-    first: FloatArray,
-    last: FloatArray,
-    inner: FloatArray,
+    first_m: FloatArray,
+    last_m: FloatArray,
+    inner_m: FloatArray,
     order: IntArray,
 ) -> IntArray:
     """Choose the best variant of every cell of ``order``, compiled (:func:`order_costs`)."""
-    return _order_variants(move, exits, entries, first, last, inner, _writable(order))
+    return _order_variants(move_m, exits, entries, first_m, last_m, inner_m, _writable(order))
 
 
 def order_greedy(
-    move: FloatArray, exits: FloatArray, entries: FloatArray, first: FloatArray, inner: FloatArray
+    move_m: FloatArray,
+    exits: FloatArray,
+    entries: FloatArray,
+    first_m: FloatArray,
+    inner_m: FloatArray,
 ) -> IntArray:
     """Nearest cell next, from the cell that begins best, compiled (:func:`order_costs`)."""
-    return _order_greedy(move, exits, entries, first, inner)
+    return _order_greedy(move_m, exits, entries, first_m, inner_m)
 
 
 def warm_up() -> None:

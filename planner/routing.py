@@ -6,6 +6,7 @@ corners that see each other and are tangent there (a path only bends round a cor
 lengths come from Dijkstra (``scipy.sparse.csgraph``). A move searches only the corners its
 ellipse bound admits (a few dozen of a field's thousands), and which tangent pairs see each
 other is kept for later moves; :meth:`FieldRouter.distances` builds the whole graph, once.
+Which moves stay inside and which corners see each other is :mod:`planner.visibility`'s.
 """
 
 from __future__ import annotations
@@ -24,24 +25,19 @@ from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from shapely import Polygon
 
 from planner.errors import PlannerError
+from planner.visibility import GRAZE_M, CornerVisibility, FieldInterior
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
-#: A move may graze the boundary by this much and still count as inside [m]; R1 allows 1 cm.
-GRAZE_M = 1e-3
 #: An end point this close outside the field (a headland ring built on the machine area's
 #: boundary, off by buffer rounding) is routed from its nearest point of the field [m].
 SNAP_M = 5e-3
 #: Corners whose visibility a query tests first (nearest the straight move by the ellipse).
 _FIRST_CORNERS = 32
-#: Corners up to which pair states are kept in a dense matrix (4 MB), beyond in a dict.
-_DENSE_CORNERS = 2048
 #: A pair of corners is left out of a search only if every path through it is this much
 #: longer than one found (the bound's rounding is some 1e-13 m) [m].
 _REACH_SLACK_M = 1e-6
-#: Sine below which a corner's neighbour counts as on a line through the corner.
-_COLLINEAR = 1e-9
 
 
 class FieldRouter:
@@ -64,40 +60,11 @@ class FieldRouter:
 
     def __init__(self, field_local: Polygon) -> None:
         self.field = shapely.orient_polygons(field_local)
-        self._grown = self.field.buffer(GRAZE_M, join_style="mitre")
-        # GEOS locates a point by the edges a horizontal line through it crosses: a comb
-        # whose teeth run along y crosses them all. With |dy| the greater over the edges,
-        # the tests run on x and y swapped (exact: a reflection, no arithmetic).
-        rings = shapely.get_rings(shapely.get_parts(self._grown))
-        edges = np.concatenate(
-            [
-                np.empty((0, 2)),
-                *[np.abs(np.diff(shapely.get_coordinates(r), axis=0)) for r in rings],
-            ]
-        )
-        self._swap = bool(edges[:, 1].sum() > edges[:, 0].sum())
-        self._test = shapely.transform(self._grown, _swap_xy) if self._swap else self._grown
-        shapely.prepare(self._test)
-        self._cornered = False
+        self._interior = FieldInterior(self.field)
+        # The corners and their pairs' visibility, made by the first move that searches.
+        self._visibility: CornerVisibility | None = None
         self._tree: cKDTree | None = None
         self.nodes = np.empty((0, 2))
-        # The corners' x and y; the unit vectors from each to its ring neighbours (prev x,
-        # prev y, next x, next y): the tangency test, on rows for fast gathers.
-        self._xy = np.empty((2, 0))
-        self._around = np.empty((4, 0))
-        # Whether two tangent corners see each other, by pair key (lo * n + hi), as
-        # queries meet them: a field of 20,000 corners has 2e8 pairs, a query a few hundred.
-        self._seen: dict[int, bool] = {}
-        # Both tests of every pair met so far in one matrix instead (-1 not yet, 0 no, 1
-        # tangent and in sight), over up to _DENSE_CORNERS corners numbered as queries meet
-        # them (_slot; -1 not met): fields' moves meet the same pairs again and again, and a
-        # jagged field's next move the pairs of the last. When more corners are met, the
-        # matrix starts afresh.
-        self._states: npt.NDArray[np.int8] | None = None
-        self._slot = np.empty(0, dtype=np.int64)
-        self._met: list[IntArray] = []
-        self._slots_used = 0
-        self._graph: csr_matrix | None = None
 
     def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
         """Whether each straight move ``starts[k] → ends[k]`` stays inside the field.
@@ -111,10 +78,7 @@ class FieldRouter:
         -------
         ndarray of bool, shape (k,)
         """
-        segments = np.stack([starts, ends], axis=1)
-        if self._swap:
-            segments = segments[..., ::-1]
-        return np.asarray(shapely.contains_properly(self._test, shapely.linestrings(segments)))
+        return self._interior.segments(starts, ends)
 
     def inside_path(self, points: FloatArray) -> bool:
         """Whether the polyline through ``points`` (shape (k, 2), k ≥ 2) stays inside the field.
@@ -122,8 +86,7 @@ class FieldRouter:
         The same answer as :meth:`inside` on its every segment, in one test (a turn's curve
         has hundreds of points).
         """
-        line = shapely.linestrings(points[:, ::-1] if self._swap else points)
-        return bool(shapely.contains_properly(self._test, line))
+        return self._interior.polyline(points)
 
     def inside_paths(self, paths: list[FloatArray]) -> npt.NDArray[np.bool_]:
         """:meth:`inside_path` of each polyline of ``paths`` (each shape (k, 2), k ≥ 2).
@@ -131,27 +94,16 @@ class FieldRouter:
         One GEOS call for them all: a jagged field's hundreds of moves between cells each try
         the vehicle's own turn first.
         """
-        if not paths:
-            return np.zeros(0, dtype=bool)
-        points = np.concatenate(paths)
-        owner = np.repeat(np.arange(len(paths)), [len(p) for p in paths])
-        lines = shapely.linestrings(points[:, ::-1] if self._swap else points, indices=owner)
-        return np.asarray(shapely.contains_properly(self._test, lines))
-
-    def _covers(self, points: FloatArray) -> npt.NDArray[np.bool_]:
-        """Whether the (grown) field covers each of ``points`` (shape (k, 2)), in one call."""
-        return np.asarray(
-            shapely.covers(self._test, shapely.points(points[:, ::-1] if self._swap else points))
-        )
+        return self._interior.polylines(paths)
 
     def _snap(self, point: FloatArray, covered: bool | None = None) -> FloatArray:
         """Return ``point``, or its nearest point of the field if it lies just outside.
 
-        ``covered``: whether the field covers ``point``, if known (:meth:`_covers`).
+        ``covered``: whether the field covers ``point``, if known (:meth:`FieldInterior.covers`).
         """
         here = shapely.Point(point)
         if covered is None:
-            covered = bool(self._covers(point[None])[0])
+            covered = bool(self._interior.covers(point[None])[0])
         if covered:
             return point
         distance = self.field.distance(here)
@@ -190,7 +142,7 @@ class FieldRouter:
         straight = self.inside(starts, ends)
         # Whether the field covers each searched move's ends: one test of them all.
         searched = np.flatnonzero(~straight)
-        covered = self._covers(np.concatenate([starts[searched], ends[searched]]))
+        covered = self._interior.covers(np.concatenate([starts[searched], ends[searched]]))
         cover_a = dict(zip(searched.tolist(), covered[: len(searched)].tolist(), strict=True))
         cover_b = dict(zip(searched.tolist(), covered[len(searched) :].tolist(), strict=True))
         return [
@@ -313,11 +265,7 @@ class FieldRouter:
             bound = np.minimum(from_a[i] + to_b[j], from_a[j] + to_b[i]) + pair_m
             near = np.flatnonzero(bound <= reach + _REACH_SLACK_M)
             i, j, pair_m = i[near], j[near], pair_m[near]
-        slots = self._slots(subset)
-        if slots is None:
-            keep = self._seen_pairs(subset[i], subset[j])
-        else:
-            keep = self._seen_slot_pairs(subset[i], subset[j], slots[i], slots[j])
+        keep = self._corners().in_sight(subset, i, j)
         i, j = i[keep], j[keep]
         if pair_m is None:
             length = np.hypot(*(self.nodes[subset[i]] - self.nodes[subset[j]]).T)
@@ -341,120 +289,12 @@ class FieldRouter:
         corners = subset[np.asarray(chain[1:-1], dtype=np.int64)]
         return np.vstack([a, self.nodes[corners], b]), distance
 
-    def _slots(self, corners: IntArray) -> IntArray | None:
-        """Slots of ``corners`` (distinct) in the pair matrix, new ones given slots.
-
-        None if they are more than the matrix holds (that query is cached by pair key).
-        """
-        size = min(len(self.nodes), _DENSE_CORNERS)
-        if len(corners) > size:
-            return None
-        if self._states is None:
-            self._states = np.full((size, size), -1, dtype=np.int8)
-            self._slot = np.full(len(self.nodes), -1, dtype=np.int64)
-        slots = self._slot[corners]
-        new = corners[slots < 0]
-        if len(new) == 0:
-            return slots
-        if self._slots_used + len(new) > size:
-            # Full: start afresh (pairs met again are tested again, with the same answers).
-            for met in self._met:
-                self._slot[met] = -1
-            self._met.clear()
-            self._states.fill(-1)
-            self._slots_used = 0
-            new = corners
-        self._slot[new] = self._slots_used + np.arange(len(new))
-        self._slots_used += len(new)
-        self._met.append(new)
-        return self._slot[corners]
-
-    def _seen_slot_pairs(
-        self, i: IntArray, j: IntArray, slot_i: IntArray, slot_j: IntArray
-    ) -> npt.NDArray[np.bool_]:
-        """:meth:`_seen_pairs` by the pair matrix: corners ``i, j`` in ``slot_i, slot_j``."""
-        assert self._states is not None
-        known = self._states[slot_i, slot_j]
-        new = np.nonzero(known < 0)[0]
-        if len(new):
-            i, j = i[new], j[new]
-            state = self._tangent_pairs(i, j).astype(np.int8)
-            tangent = np.nonzero(state)[0]
-            if len(tangent):
-                state[tangent] = self.inside(self.nodes[i[tangent]], self.nodes[j[tangent]])
-            self._states[slot_i[new], slot_j[new]] = state
-            self._states[slot_j[new], slot_i[new]] = state
-            known[new] = state
-        return np.asarray(known == 1)
-
-    def _seen_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
-        """Whether corners ``i[k]`` and ``j[k]`` are tangent and see each other (cached)."""
-        ok = self._tangent_pairs(i, j)
-        where = np.nonzero(ok)[0]
-        if len(where) == 0:
-            return ok
-        lo, hi = np.minimum(i[where], j[where]), np.maximum(i[where], j[where])
-        keys = (lo * len(self.nodes) + hi).tolist()
-        seen = self._seen
-        known = np.fromiter((seen.get(k, 2) for k in keys), dtype=np.int8, count=len(keys))
-        new = np.nonzero(known == 2)[0]
-        if len(new):
-            fresh = self.inside(self.nodes[lo[new]], self.nodes[hi[new]])
-            known[new] = fresh
-            seen.update(zip([keys[k] for k in new.tolist()], fresh.tolist(), strict=True))
-        ok[where] = known == 1
-        return ok
-
-    def _tangent_pairs(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
-        """Whether the line through corners ``i[k]`` and ``j[k]`` is tangent at both.
-
-        A shortest path only passes a corner it wraps round, so other pairs need no edge.
-        Compiled (:func:`planner.edge_kernels.tangent_pairs`, the same arithmetic);
-        :meth:`_tangent_pairs_numpy` is the reference.
-        """
-        from planner import edge_kernels  # numba: imported by the first plan that needs it
-
-        return edge_kernels.tangent_pairs(self._xy, self._around, i, j, _COLLINEAR)
-
-    def _tangent_pairs_numpy(self, i: IntArray, j: IntArray) -> npt.NDArray[np.bool_]:
-        """:meth:`_tangent_pairs` in numpy."""
-        x, y = self._xy
-        dx, dy = x[j] - x[i], y[j] - y[i]
-        # A neighbour within 1e-9 rad of the line counts as on it (sines, as distances).
-        tolerance = _COLLINEAR * np.hypot(dx, dy)
-        ok = tolerance == 0.0
-        wraps = ~ok
-        for k in (i, j):
-            prev_x, prev_y, next_x, next_y = self._around[:, k]
-            before = dx * prev_y - dy * prev_x
-            after = dx * next_y - dy * next_x
-            wraps &= (
-                (np.abs(before) < tolerance) | (np.abs(after) < tolerance) | (before * after > 0.0)
-            )
-        return np.asarray(ok | wraps)
-
-    def _corners(self) -> None:
-        if self._cornered:
-            return
-        self._cornered = True
-        nodes, prev, nxt = [], [], []
-        for ring in (self.field.exterior, *self.field.interiors):
-            xy = np.asarray(ring.coords)[:-1]
-            before, after = np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0)
-            cross = _cross(xy - before, after - xy)
-            # Exterior counter-clockwise, holes clockwise: free space turns right at its
-            # reflex corners.
-            reflex = cross < 0.0
-            nodes.append(xy[reflex])
-            prev.append(before[reflex])
-            nxt.append(after[reflex])
-        self.nodes = np.concatenate(nodes)
-        to_prev = np.concatenate(prev) - self.nodes
-        to_next = np.concatenate(nxt) - self.nodes
-        to_prev /= np.hypot(*to_prev.T)[:, None]
-        to_next /= np.hypot(*to_next.T)[:, None]
-        self._xy = np.ascontiguousarray(self.nodes.T)
-        self._around = np.ascontiguousarray(np.hstack([to_prev, to_next]).T)
+    def _corners(self) -> CornerVisibility:
+        """Return the field's corners and their pairs' visibility, made on first use."""
+        if self._visibility is None:
+            self._visibility = CornerVisibility(self.field, self._interior)
+            self.nodes = self._visibility.nodes
+        return self._visibility
 
     def distances(self, starts: FloatArray, ends: FloatArray) -> FloatArray:
         """Return the shortest-path lengths inside the field from every start to every end.
@@ -484,7 +324,7 @@ class FieldRouter:
         seen = self.inside(a, b).reshape(p, q)
         if seen.all():
             return straight
-        corners = self._corner_graph()
+        corners = self._corners().graph()
         n = len(self.nodes)
         if n == 0:
             unreachable: FloatArray = np.where(seen, straight, np.inf)
@@ -520,29 +360,6 @@ class FieldRouter:
         # fail it against that edge's own corner.
         return self.inside(np.repeat(p[None], len(which), axis=0), self.nodes[which])
 
-    def _corner_graph(self) -> csr_matrix:
-        """Every pair of corners tangent and in sight, once per field (for :meth:`distances`)."""
-        if self._graph is not None:
-            return self._graph
-        self._corners()
-        n = len(self.nodes)
-        rows, cols = [np.empty(0, dtype=np.int64)], [np.empty(0, dtype=np.int64)]
-        # Rows in blocks of about a million pairs: memory stays small on big fields. Not
-        # through the query cache: every pair is met once here.
-        step = max(1, 1_000_000 // max(n, 1))
-        for first in range(0, n, step):
-            i, j = np.nonzero(np.arange(first, min(n, first + step))[:, None] < np.arange(n))
-            i += first
-            tangent = self._tangent_pairs(i, j)
-            i, j = i[tangent], j[tangent]
-            visible = self.inside(self.nodes[i], self.nodes[j])
-            rows.append(i[visible])
-            cols.append(j[visible])
-        i, j = np.concatenate(rows), np.concatenate(cols)
-        length = np.hypot(*(self.nodes[i] - self.nodes[j]).T)
-        self._graph = csr_matrix((length, (i, j)), shape=(n, n))
-        return self._graph
-
 
 #: Subsets up to this many corners share their pair indices (at most 64 sizes, ~1 MB each);
 #: larger ones are rare and would pin tens of MB per size in a long-lived worker.
@@ -564,10 +381,6 @@ def _shared_pairs(count: int) -> tuple[IntArray, IntArray]:
     i.flags.writeable = False
     j.flags.writeable = False
     return i, j
-
-
-def _swap_xy(xy: FloatArray) -> FloatArray:
-    return xy[:, ::-1]
 
 
 def _dijkstra(
@@ -615,10 +428,6 @@ def _dijkstra(
                 previous[other] = node
                 heapq.heappush(heap, (reach, other))
     return None
-
-
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
 def path_length(points: FloatArray) -> float:

@@ -18,7 +18,9 @@ import shapely
 from hypothesis import settings
 from shapely import Polygon
 
-from planner.projection import local_frame
+# Shared with the benches, which do not import the tests.
+from bench.shapes import BALI as BALI
+from bench.shapes import field_from_local as field_from_local
 
 # The same examples on every run (CI and a developer's `make test` see the same); set
 # HYPOTHESIS_PROFILE=explore to search new random examples (failures are kept in .hypothesis/).
@@ -57,20 +59,6 @@ SHARED = ROOT.parent / "shared"
 FIELDS_DIR = SHARED / "fields"
 GPX_XSD = SHARED / "schemas" / "gpx-1.1.xsd"
 PAPER_FIELD = ROOT / "tests" / "data" / "paper_ketewel.geojson"
-
-#: Bali, near the paper's trial field.
-BALI = (115.298, -8.6265)
-
-
-def field_from_local(
-    exterior_m: list[tuple[float, float]],
-    holes_m: list[list[tuple[float, float]]] | None = None,
-    *,
-    at: tuple[float, float] = BALI,
-) -> Polygon:
-    """A WGS84 polygon whose local shape (metres, x east, y north) is given, centred ``at``."""
-    frame = local_frame(*at)
-    return frame.to_lonlat(Polygon(exterior_m, holes_m or []))
 
 
 def load_geojson(path: Path) -> Any:

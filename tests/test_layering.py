@@ -41,3 +41,42 @@ def test_pure_packages_import_no_io_layer_and_do_no_io(package: str, path: Path)
             assert not name.startswith("matplotlib.pyplot"), f"{path} imports pyplot"
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
             assert node.func.id not in FORBIDDEN_CALLS, f"{path} calls {node.func.id}()"
+
+
+#: Modules that import nothing of their own package. ``planner.kernels`` holds the helpers
+#: (``_jit``, ``_mn``, ...) that every other kernel module imports, so importing any of them
+#: back would be a cycle: :mod:`planner.warm_up`, above them all, warms them all.
+BASE_MODULES = ["planner/kernels.py"]
+
+
+@pytest.mark.parametrize("relative", BASE_MODULES)
+def test_base_modules_import_nothing_of_their_package(relative: str) -> None:
+    path = ROOT / relative
+    package = relative.split("/")[0]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            # A relative import (level > 0) is of the package by definition.
+            names = [package if node.level else node.module or ""]
+        else:
+            names = []
+        for name in names:
+            assert name.split(".")[0] != package, f"{relative} imports {name}"
+
+
+BENCHES = sorted((ROOT / "bench").rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", BENCHES, ids=[str(p.relative_to(ROOT)) for p in BENCHES])
+def test_benches_import_no_tests(path: Path) -> None:
+    """What a bench shares with the tests lives in ``bench/`` (``bench.shapes``), not ``tests/``."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            names = [node.module or ""]
+        else:
+            names = []
+        for name in names:
+            assert name.split(".")[0] != "tests", f"{path} imports {name}"

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 from app.db import get_engine
 from app.jobs import store
-from app.jobs.runner import run_job, warm_up
+from app.jobs.runner import run_job
 
 if TYPE_CHECKING:
     from distributed import Client, Future, LocalCluster
@@ -164,13 +164,14 @@ class JobEngine:
             )
         from app.jobs.kernels_plugin import KernelWarmUp
 
-        self.client.register_plugin(KernelWarmUp())
+        # The one warm-up of the workers: the planner's kernels, then the job kinds' modules.
+        # A plugin rather than client.run(...): it reaches every worker, present and future
+        # (a restarted or added one too, on a remote cluster as well), in the background,
+        # and start() does not wait for it.
+        self.client.register_plugin(KernelWarmUp(job_kinds=True))
         self.sweep()
         self._sweeper = threading.Thread(target=self._sweep_loop, name="job-sweep", daemon=True)
         self._sweeper.start()
-        if self.local:
-            # Workers import the kinds' modules now rather than when the first job comes.
-            self.client.run(warm_up)
 
     def submit(self, job_id: int) -> None:
         """Run job ``job_id`` on a worker (unless this engine has it running already).

@@ -13,9 +13,12 @@ from urllib.parse import urlsplit
 
 import httpx2
 import pytest
+import uvicorn
 from uvicorn.protocols.http.h11_impl import H11Protocol
 
 from app import serving
+from app.main import create_app
+from app.settings import Settings, get_settings
 from app.testing import running_server
 
 HEADER_TIMEOUT_S = 1.0
@@ -132,6 +135,56 @@ def test_the_installed_uvicorn_is_the_one_the_guard_fits():
     assert asyncio.run(serving.probe()).startswith(b"HTTP/1.1 204")
     refused = asyncio.run(serving.probe(limit=0))
     assert refused.startswith(b"HTTP/1.1 503") and b"retry-after: 2\r\n" in refused
+
+
+def guarded(app: object) -> serving.GuardedH11Protocol:
+    """The guard of one connection to ``app``, as uvicorn builds it (proxy headers on)."""
+    from uvicorn.server import ServerState
+
+    class Guarded(serving.GuardedH11Protocol):
+        load = serving.Load()
+
+    config = uvicorn.Config(app, log_config=None, lifespan="off", access_log=False)
+    return Guarded(config=config, server_state=ServerState(), app_state={})
+
+
+def test_an_app_made_with_other_settings_is_guarded_by_those():
+    """Limit and read timeouts of the settings the app was made with, not the environment's."""
+    settings = Settings(database_url="sqlite://", limit_concurrency=1, header_timeout_s=0.05)
+    assert settings.limit_concurrency != get_settings().limit_concurrency
+    app = create_app(settings)
+
+    async def silent_client_closed() -> bool:
+        protocol, transport = guarded(app), serving._ProbeTransport()
+        protocol.connection_made(transport)
+        await asyncio.sleep(0.5)  # the environment's 10 s would still wait
+        closed = transport.closed
+        protocol.connection_lost(None)
+        return closed
+
+    async def second_connection_answer() -> bytes:
+        protocol, transport = guarded(app), serving._ProbeTransport()
+        protocol.load.connections = 1  # another client holds the one connection allowed
+        protocol.connection_made(transport)
+        protocol.data_received(b"GET /nowhere HTTP/1.1\r\nHost: x\r\n\r\n")
+        for _ in range(100):
+            if b"\r\n\r\n" in transport.written:
+                break
+            await asyncio.sleep(0.01)
+        protocol.connection_lost(None)
+        return bytes(transport.written)
+
+    assert asyncio.run(silent_client_closed())
+    assert asyncio.run(second_connection_answer()).startswith(b"HTTP/1.1 503")
+
+
+def test_an_app_without_settings_is_guarded_by_the_environments():
+    async def app(scope: object, receive: object, send: object) -> None: ...
+
+    async def limit() -> int:
+        return guarded(app)._limit  # uvicorn's protocol is made on a running loop
+
+    assert asyncio.run(limit()) == get_settings().limit_concurrency
 
 
 def test_a_uvicorn_that_bypasses_the_guard_stops_the_server_from_starting(

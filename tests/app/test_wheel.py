@@ -62,7 +62,7 @@ def test_wheel_installs_into_a_fresh_venv_and_serves_the_page(tmp_path: Path) ->
     # (about 9 s of CPU, once), into the installed package's cache, rather than while
     # `tillpath serve` starts below (it loads them before it answers).
     subprocess.run(
-        [str(python), "-c", "from planner.kernels import warm_up; warm_up()"],
+        [str(python), "-c", "from planner.warm_up import warm_up; warm_up()"],
         cwd=elsewhere,
         check=True,
         timeout=600,

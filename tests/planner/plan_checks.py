@@ -6,14 +6,11 @@ waypoints and segments, re-projected into the field's frame, with shapely.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import shapely
-from shapely import LineString, Polygon
+from shapely import LineString
 
-from planner import plan_coverage
-from planner.errors import PlannerError
+from bench.shapes import fixed_heading_figures as fixed_heading_figures
 from planner.projection import field_frame
 from planner.types import CoveragePlan, Vehicle
 
@@ -172,22 +169,3 @@ def line_to_line_turns(plan: CoveragePlan) -> list[tuple[np.ndarray, bool]]:
             x, y = frame.to_local_xy(*np.asarray(segment.lonlat).T)
             turns.append((np.stack([x, y], axis=1), cell_of(k - 1) == cell_of(k + 1)))
     return turns
-
-
-def fixed_heading_figures(
-    field: Polygon, headings_deg: list[float], **options: Any
-) -> tuple[np.ndarray, np.ndarray]:
-    """Path length [m] and coverage ratio of the field planned at each fixed heading.
-
-    The brute force that judges the heading search (R5, issue 9 item 5); headings at which
-    the vehicle cannot plan the field are left out of both arrays.
-    """
-    lengths, covers = [], []
-    for heading in headings_deg:
-        try:
-            stats = plan_coverage(field, angle_deg=heading, **options).stats
-        except PlannerError:
-            continue
-        lengths.append(stats.path_length_m)
-        covers.append(stats.coverage_ratio)
-    return np.asarray(lengths), np.asarray(covers)

@@ -35,7 +35,7 @@ from planner.decomposition import (
 from planner.heading_search import _SCRATCH_ARRAYS, _score_block, _score_block_numpy
 from planner.lines import to_sweep
 from planner.projection import field_frame
-from planner.routing import FieldRouter
+from planner.visibility import CornerVisibility, FieldInterior
 from tests.planner.random_fields import fields_with_holes, star_field
 from tests.planner.test_real_fields import real_fields
 
@@ -237,17 +237,17 @@ def test_tangent_pairs_compiled_equal_numpy(part: int) -> None:
     teeth = [(x, 0.0 if i % 2 == 0 else 2.0) for i, x in enumerate(range(0, 62, 2))]
     fields.append(Polygon([*teeth, (60, 0), (60, 30), (0, 30)]))  # collinear corners
     for field in fields[part::2]:
-        router = FieldRouter(field)
-        router._corners()
-        n = len(router.nodes)
+        oriented = shapely.orient_polygons(field)
+        corners = CornerVisibility(oriented, FieldInterior(oriented))
+        n = len(corners.nodes)
         if n < 2:
             continue
         i, j = np.triu_indices(n, k=1)
         if len(i) > 20_000:
             pick = rng.choice(len(i), 20_000, replace=False)
             i, j = i[pick], j[pick]
-        fast = router._tangent_pairs(i, j)
-        assert np.array_equal(fast, router._tangent_pairs_numpy(i, j))
+        fast = corners.tangent(i, j)
+        assert np.array_equal(fast, corners.tangent_numpy(i, j))
 
 
 def assert_same_scores(parts: list[Polygon], headings_deg: FloatArray, d: float) -> None:

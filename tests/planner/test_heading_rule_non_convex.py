@@ -3,7 +3,7 @@
 Every fixed heading (every 1°, 0–179) is planned with ``angle_deg`` as a user would; the rule
 (R5) compares only those whose coverage is within 0.2 pp of the best fixed heading's, and the
 searched plan must be no more than 1 % longer than the shortest of them. The fields are star
-fields of the property tests (:func:`tests.planner.random_fields.star_field`), with holes,
+fields of the property tests (:func:`bench.shapes.star_field`), with holes,
 at intervals a tenth to a fortieth of their size; the default vehicle (the hand tractor).
 
 Each case plans 181 fields' worth (about 5 s a case on a quiet machine): the first few of a
@@ -17,21 +17,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bench.shapes import LOSS_SHARE, NON_CONVEX_CASES, field_from_local, star_field
 from planner import angles, plan_coverage
-from tests.conftest import field_from_local
-from tests.planner.random_fields import star_field
 
-#: (vertices, seed, size [m], holes asked for, interval [m]).
-CASES = [
-    pytest.param(10, 2212568278, 334.8615342348589, 2, 18.13, id="10-gon-2-holes"),
-    pytest.param(9, 1850753208, 230.22401567130785, 3, 12.41, id="9-gon-3-holes"),
-    pytest.param(6, 4255028923, 78.40930496557849, 1, 2.81, id="6-gon-1-hole"),
-    pytest.param(8, 1123361780, 251.0792911278842, 1, 8.62, id="8-gon-1-hole"),
-    pytest.param(13, 4110225764, 202.1527627324664, 3, 11.82, id="13-gon-was-1.4pct"),
-    pytest.param(16, 401347228, 401.4893937441768, 1, 40.07, id="16-gon-was-4.3pct"),
-]
-#: The searched plan may be this much longer than the best fixed heading that keeps the rule.
-LOSS_SHARE = 0.01
+#: (vertices, seed, size [m], holes asked for, interval [m]), shared with
+#: ``bench.heading_brute_force_non_convex --cases``.
+CASES = [pytest.param(*case, id=name) for name, case in NON_CONVEX_CASES.items()]
 
 
 @pytest.mark.slow

@@ -14,7 +14,7 @@ from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
 from shapely import LineString, Polygon, box
 
-from planner import routing
+from planner import visibility
 from planner.routing import GRAZE_M, FieldRouter, path_length
 from tests.planner.random_fields import fields_with_holes
 
@@ -205,12 +205,13 @@ def test_paths_on_fields_of_many_corners_are_as_short_as_a_plain_visibility_grap
     queries = [(tuple(points[i[k]]), tuple(points[j[k]])) for k in far]
     lengths = _reference_lengths(area, corners, queries)
     # Pair states in a dense matrix (up to 2,048 corners) and in a dict (beyond).
-    for dense in (routing._DENSE_CORNERS, 0):
-        with mock.patch.object(routing, "_DENSE_CORNERS", dense):
+    for dense in (visibility._DENSE_CORNERS, 0):
+        with mock.patch.object(visibility, "_DENSE_CORNERS", dense):
             if not dense:
                 router = FieldRouter(area)
             for (a, b), (grazing, exact) in zip(queries, lengths, strict=True):
                 path = router.path(a, b)
                 assert_inside(area, path)
                 assert grazing - 1e-9 <= path_length(path) <= exact + 1e-9
-            assert not router._cornered or (router._states is None) == (not dense)
+            corners = router._visibility
+            assert corners is None or (corners._states is None) == (not dense)
