@@ -436,8 +436,38 @@ def _length_aggregates(
         out[8, h], out[9, h], out[10, h] = p_last, v_last[0], v_last[1]
 
 
-def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float) -> FloatArray | None:
-    """Missed area per heading, or None where the numpy code must decide (see module doc)."""
+@_jit
+def _less_fitting(
+    excess: FloatArray,
+    width: FloatArray,
+    d: float,
+    area: float,
+    field_m2: float,
+    width_m: float,
+    reach_m: float,
+) -> None:
+    """``excess`` becomes :func:`planner.heading_coverage.estimated_coverage`, in place.
+
+    The closed-form coverage less :func:`planner.line_ends.fitting_loss_m2` per field area,
+    with ``width`` each heading's width: numpy's operations on each element, in its order.
+    """
+    for h in range(len(excess)):
+        w = width[h]
+        n = float(_line_count(w, d))
+        last = _mn(_mx(w - (n - 1.0) * d, 0.0), d)
+        strips = _mx(n - 1.0, 0.0) * d + last
+        turn_ends = 2.0 * _mx(n - 2.0, 0.0) * d + d + last if n >= 2.0 else 0.0
+        loss = (strips * width_m + turn_ends * reach_m) / field_m2
+        excess[h] = _clip(1.0 - excess[h] / area, 0.0, 1.0) - loss
+
+
+def coverage_excess(
+    u_raw: FloatArray, v_ring: FloatArray, d: float, widths: FloatArray | None = None
+) -> FloatArray | None:
+    """Missed area per heading, or None where the numpy code must decide (see module doc).
+
+    ``widths``, if given, receives each heading's width ``u.max() - u.min()`` [m].
+    """
     if u_raw.size == 0:  # no heading or no vertex: the kernel reads no bounds
         return None
     out = np.empty(len(u_raw))
@@ -447,10 +477,28 @@ def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float) -> FloatArr
         float(d),
         out,
         np.empty(u_raw.shape),
-        np.empty(len(u_raw)),
+        np.empty(len(u_raw)) if widths is None else widths,
         np.empty((14, u_raw.shape[1])),
     )
     return out if ok else None
+
+
+def estimated_coverage(
+    u_raw: FloatArray,
+    v_ring: FloatArray,
+    d: float,
+    area: float,
+    *,
+    field_m2: float,
+    width_m: float,
+    reach_m: float,
+) -> FloatArray | None:
+    """:func:`planner.heading_coverage.estimated_coverage` compiled, or None (numpy decides)."""
+    widths = np.empty(len(u_raw))
+    out = coverage_excess(u_raw, v_ring, d, widths)
+    if out is not None:
+        _less_fitting(out, widths, float(d), area, field_m2, width_m, reach_m)
+    return out
 
 
 def length_aggregates(

@@ -10,9 +10,10 @@ import shapely
 from shapely import MultiPoint
 
 from planner import kernel_helpers, kernels
-from planner.heading_coverage import convex_excess
+from planner.heading_coverage import convex_excess, estimated_coverage, estimated_coverage_numpy
 from planner.lines import to_sweep
 from planner.ordering import HeadingAggregates, convex_aggregates
+from planner.vehicles import resolve_vehicle
 
 FloatArray = np.ndarray
 
@@ -51,6 +52,25 @@ def test_coverage_kernel_equals_numpy(seed: int) -> None:
         fast = kernels.coverage_excess(u, v, d)
         assert fast is not None
         assert same_bits(convex_excess(u, v, d), fast)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_estimated_coverage_kernel_equals_numpy(seed: int) -> None:
+    """The search's estimate (coverage less the fitting) and the widths, bit for bit."""
+    rng = np.random.default_rng(300 + seed)
+    vehicles = [resolve_vehicle("hand_tractor"), resolve_vehicle("small_tractor")]
+    for k, ring in enumerate(convex_rings(seed, 100)):
+        d = float(rng.choice([0.5, 1.0, 1.5, 2.0, 2.5, 4.0, 7.3, 30.0]))
+        h = headings(rng)
+        sweep = to_sweep(ring[:, 0], ring[:, 1], h[:, None])
+        field_m2 = float(shapely.Polygon(ring).area) * rng.uniform(0.9, 1.1)
+        vehicle = vehicles[k % 2]
+        fast = estimated_coverage(ring, h, d, sweep, vehicle=vehicle, field_m2=field_m2)
+        slow = estimated_coverage_numpy(ring, h, d, sweep, vehicle=vehicle, field_m2=field_m2)
+        assert same_bits(slow, fast)
+        widths = np.empty(len(h))
+        assert kernels.coverage_excess(sweep[0], sweep[1], d, widths) is not None
+        assert same_bits(sweep[0].max(axis=1) - sweep[0].min(axis=1), widths)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
