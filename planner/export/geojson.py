@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+import shapely
 from shapely import Polygon
 
 from planner.errors import InvalidFieldError
@@ -175,4 +176,9 @@ def _feature(geometry: dict[str, Any], properties: dict[str, Any]) -> dict[str, 
 
 def _polygon(polygon: Polygon) -> dict[str, Any]:
     rings = [polygon.exterior, *polygon.interiors]
-    return {"type": "Polygon", "coordinates": [[list(c) for c in r.coords] for r in rings]}
+    # The rings' coordinates as lists of [x, y] (or [x, y, z]) floats, as list(c) per point.
+    z = polygon.has_z
+    return {
+        "type": "Polygon",
+        "coordinates": [shapely.get_coordinates(r, include_z=z).tolist() for r in rings],
+    }
