@@ -118,11 +118,8 @@ def plan_coverage(
 
     frame = field_frame(field_lonlat)
     field_local = frame.to_local(field_lonlat)
-    start_xy = validation.validate_point(
-        start_lonlat, input_name="start", frame=frame, field_local=field_local
-    )
-    finish_xy = validation.validate_point(
-        finish_lonlat, input_name="finish", frame=frame, field_local=field_local
+    start_xy, finish_xy = validation.validate_points(
+        start_lonlat, finish_lonlat, frame=frame, field_local=field_local
     )
     # The one pattern dispatch: spiral rounds here; boustrophedon and snake differ only in
     # the order of the lines (and so the turns), below.
