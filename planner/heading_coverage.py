@@ -67,7 +67,7 @@ def convex_coverage(
     """
     headings = np.asarray(headings_deg, dtype=float)
     d = float(interval_m)
-    area = _ring_area(ring_xy)
+    area = ring_area_m2(ring_xy)
     u_ring, v_ring = (
         to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None]) if sweep is None else sweep
     )
@@ -87,6 +87,7 @@ def estimated_coverage(
     *,
     vehicle: Vehicle,
     field_m2: float,
+    ring_m2: float | None = None,
 ) -> FloatArray:
     """Estimate the coverage of fitted lines at every heading: the heading search's score.
 
@@ -102,6 +103,8 @@ def estimated_coverage(
     vehicle : Vehicle
     field_m2 : float
         The field's area [m²].
+    ring_m2 : float, optional
+        :func:`ring_area_m2` of ``ring_xy``, if the caller has it (the search scores twice).
 
     Examples
     --------
@@ -119,7 +122,7 @@ def estimated_coverage(
         sweep[0],
         sweep[1],
         float(interval_m),
-        _ring_area(ring_xy),
+        ring_area_m2(ring_xy) if ring_m2 is None else ring_m2,
         field_m2=field_m2,
         width_m=vehicle.width_m,
         reach_m=end_reach_m(vehicle, float(interval_m)),
@@ -147,7 +150,7 @@ def estimated_coverage_numpy(
     return np.asarray(convex_coverage(ring_xy, headings_deg, interval_m, sweep) - loss)
 
 
-def _ring_area(ring_xy: FloatArray) -> float:
+def ring_area_m2(ring_xy: FloatArray) -> float:
     """Return the shoelace area of a counter-clockwise ring [m²]."""
     x, y = ring_xy[:, 0], ring_xy[:, 1]
     nxt = np.arange(1, len(ring_xy) + 1) % len(ring_xy)  # np.r_ costs more than the rest

@@ -15,7 +15,7 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.fitted_choice import choose_convex
-from planner.heading_coverage import estimated_coverage
+from planner.heading_coverage import estimated_coverage, ring_area_m2
 from planner.lines import to_sweep
 from planner.ordering import VariantLengths, score_headings
 from planner.projection import LocalFrame, field_frame
@@ -189,12 +189,19 @@ def plan_coverage(
         return score_headings(ring_xy, headings, interval, start_xy, finish_xy, sweep_of(headings))
 
     field_m2 = float(field_local.area)
+    ring_m2 = ring_area_m2(ring_xy)
 
     def coverage_of(headings: FloatArray) -> FloatArray:
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
         return estimated_coverage(
-            ring_xy, headings, interval, sweep_of(headings), vehicle=machine, field_m2=field_m2
+            ring_xy,
+            headings,
+            interval,
+            sweep_of(headings),
+            vehicle=machine,
+            field_m2=field_m2,
+            ring_m2=ring_m2,
         )
 
     choice = angles.search_headings(

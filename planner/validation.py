@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import shapely
-from shapely import Point, Polygon
+from shapely import Polygon
 
 from planner.errors import InvalidFieldError, InvalidParameterError
 from planner.projection import UTM_LAT_RANGE_DEG, LocalFrame, geodesic_area_m2
@@ -216,14 +216,21 @@ def validate_points(
     except InvalidParameterError as malformed:
         finish, finish_error = None, malformed  # raised after the start's distance
     given = [p for p in (start, finish) if p is not None]
-    projected: list[tuple[float, float]] = []
+    projected: list[tuple[tuple[float, float], float]] = []
     if given:
         x, y = frame.to_local_xy([p[0] for p in given], [p[1] for p in given])
-        projected = list(zip(x.tolist(), y.tolist(), strict=True))
-    start_xy = None if start is None else _near("start", start, projected[0], field_local)
+        # Both distances in one call too; a point that does not project is infinitely far.
+        finite = np.isfinite(x + y)
+        distance_m = np.full(len(given), np.inf)
+        if finite.any():
+            at = shapely.points(np.stack([x[finite], y[finite]], axis=1))
+            distance_m[finite] = shapely.distance(field_local, at)
+        xy = zip(x.tolist(), y.tolist(), strict=True)
+        projected = list(zip(xy, distance_m.tolist(), strict=True))
+    start_xy = None if start is None else _near("start", start, *projected[0])
     if finish_error is not None:
         raise finish_error
-    finish_xy = None if finish is None else _near("finish", finish, projected[-1], field_local)
+    finish_xy = None if finish is None else _near("finish", finish, *projected[-1])
     return start_xy, finish_xy
 
 
@@ -243,13 +250,9 @@ def _lonlat(input_name: str, point_lonlat: Any) -> tuple[float, float] | None:
 
 
 def _near(
-    input_name: str,
-    lonlat: tuple[float, float],
-    xy: tuple[float, float],
-    field_local: Polygon,
+    input_name: str, lonlat: tuple[float, float], xy: tuple[float, float], distance_m: float
 ) -> tuple[float, float]:
-    """Return ``xy`` if the point is within 5 km of the field."""
-    distance_m = field_local.distance(Point(xy)) if math.isfinite(xy[0] + xy[1]) else math.inf
+    """Return ``xy`` if the point, ``distance_m`` from the field, is within 5 km of it."""
     if not distance_m <= MAX_POINT_DISTANCE_M:
         lon, lat = lonlat
         raise InvalidParameterError(
