@@ -54,14 +54,14 @@ def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str,
     if len(lon) >= 2:
         path = [[x, y] for x, y in zip(lon, lat, strict=True)]
         features.append(_feature({"type": "LineString", "coordinates": path}, {"kind": "path"}))
-    features.extend(
+    features += [  # a list comprehension: a generator resumes once per waypoint
         {
             "type": "Feature",
             "properties": {"kind": "waypoint", "seq": i, "role": role, "line": line},
             "geometry": {"type": "Point", "coordinates": [x, y]},
         }
         for i, x, y, role, line in zip(seq, lon, lat, roles, lines, strict=True)
-    )
+    ]
     stats = plan.stats.as_dict()
     del stats["planning_ms"]
     properties = {"name": name, "interval_m": plan.interval_m, **stats}
