@@ -84,7 +84,7 @@ def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> F
     longest = longest[length[longest] > 0]
     edges = np.degrees(np.arctan2(dx[longest], dy[longest])) % 180.0
     sweep = np.arange(0.0, 180.0, SWEEP_STEP_DEG)
-    headings = np.concatenate([sweep, np.round(edges, 9) % 180.0])
+    headings = np.concatenate([sweep, edges.round(9) % 180.0])
     return _sorted_unique(headings)
 
 
@@ -150,13 +150,16 @@ def select_plan(
     if objective == "fewest_lines":
         fewest = counts == counts[allowed].min()
         total = np.where(fewest[:, None], total, np.inf)
-    flat = int(np.argmin(total))
+    flat = int(total.argmin())
     return flat // 4, flat % 4
 
 
 def tied_lengths(lengths: VariantLengths) -> FloatArray:
     """Path lengths rounded to :data:`_TIE_M`, so that ties break the same way every time."""
-    return np.asarray(np.round(lengths.total / _TIE_M) * _TIE_M)
+    # Array methods, not the np.* wrappers (the same operation, less call overhead): the
+    # search rounds and reduces a few hundred values at a time, a dozen times.
+    rounded: FloatArray = (lengths.total / _TIE_M).round() * _TIE_M
+    return rounded
 
 
 #: ``lengths(headings) -> (path lengths of the four variants, line counts)``.
@@ -302,14 +305,14 @@ def search_headings(
         # headings: the first round sweeps round the best-covering one too, for coverage.
         by_coverage = np.where(affordable, coverage, -np.inf)
         tops = _spread(np.lexsort((headings, -by_coverage)), headings, affordable, COVERAGE_SEEDS)
-        top_grid = np.round(headings[tops] / REFINE_STEP_DEG) * REFINE_STEP_DEG
+        top_grid = (headings[tops] / REFINE_STEP_DEG).round() * REFINE_STEP_DEG
         # Repeats are harmless: the sweep round them is made unique below.
         centres = np.concatenate([[headings[best]], top_grid, headings[picked]])
         pool = _Pool(headings, lengths, counts, coverage, tied, least)
         for round_ in range(REFINE_ROUNDS):
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.
-            grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
-            near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
+            grid = (centres / REFINE_STEP_DEG).round() * REFINE_STEP_DEG
+            near = ((grid[:, None] + _OFFSETS).ravel() % 180.0).round(9)
             near = _sorted_unique(near)  # then those not scored yet (np.setdiff1d, cheaper)
             # A set of plain floats, not np.isin: a few hundred values, and isin sorts both.
             scored = set(pool.headings.tolist())
@@ -322,8 +325,13 @@ def search_headings(
             key = _objective_key(pool.least, pool.counts, objective)
             wanted = np.isnan(pool.coverage) & (key < key[pool.index(chosen[0])])
             if round_ == 0:
-                gap = np.abs((pool.headings[:, None] - top_grid + 90.0) % 180.0 - 90.0)
-                wanted |= np.isnan(pool.coverage) & (gap.min(axis=1) <= 9.5 * REFINE_STEP_DEG)
+                # Within the sweep of a best-covering heading: column by column, as the least
+                # gap along an axis of a few costs more (finite gaps: min <= t iff any <= t).
+                close = np.zeros(len(pool.headings), dtype=bool)
+                for top in top_grid.tolist():
+                    gap = np.abs((pool.headings - top + 90.0) % 180.0 - 90.0)
+                    close |= gap <= 9.5 * REFINE_STEP_DEG
+                wanted |= np.isnan(pool.coverage) & close
             if not wanted.any():
                 break
             pool.coverage[wanted] = coverage_of(pool.headings[wanted])
@@ -379,7 +387,7 @@ def _best_covering(
         (pool.headings, _objective_key(pool.least, pool.counts, objective), -coverage)
     )
     picked = _spread(order, pool.headings, np.isfinite(coverage), ALTERNATIVES)
-    return tuple((float(pool.headings[i]), int(np.argmin(total[i]))) for i in picked)
+    return tuple((float(pool.headings[i]), int(total[i].argmin())) for i in picked)
 
 
 def _spread(
