@@ -84,12 +84,26 @@ def candidate_headings(ring_xy: FloatArray, fixed_deg: float | None = None) -> F
     longest = longest[length[longest] > 0]
     edges = np.degrees(np.arctan2(dx[longest], dy[longest])) % 180.0
     sweep = np.arange(0.0, 180.0, SWEEP_STEP_DEG)
-    headings = np.concatenate([sweep, np.round(edges, 9) % 180.0])
-    return np.unique(headings)
+    headings = np.concatenate([sweep, edges.round(9) % 180.0])
+    return _sorted_unique(headings)
+
+
+def _sorted_unique(values: FloatArray) -> FloatArray:
+    """``np.unique`` of finite headings: sorted, each value once.
+
+    Its sort-and-compare path without the wrapper (a few hundred values: the wrapper's
+    checks cost more than the work). The headings come from ``% 180.0`` and are never NaN
+    nor ``-0.0``, so which of two equal values is kept does not show.
+    """
+    ordered = np.sort(values)
+    keep = np.empty(len(ordered), dtype=bool)
+    keep[:1] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=keep[1:])
+    return ordered[keep]
 
 
 def select_plan(
-    lengths: VariantLengths,
+    lengths: VariantLengths | None,
     line_counts_per_heading: IntArray,
     objective: Objective,
     *,
@@ -103,7 +117,7 @@ def select_plan(
     then the path. Ties go to the first heading and variant, so the choice is deterministic.
     Headings that need more than :data:`MAX_LINES` lines, and those not ``eligible`` (if
     given: the coverage rule of R5), are never chosen. ``tied``: :func:`tied_lengths` of
-    ``lengths``, if the caller has it.
+    ``lengths``, if the caller has it (then ``lengths`` may be None).
 
     Raises
     ------
@@ -128,7 +142,10 @@ def select_plan(
             f"{at}the field needs at least {int(counts.min()):,} tillage lines; tillpath "
             f"plans at most {MAX_LINES:,}: choose a wider interval or a smaller field",
         )
-    total = tied_lengths(lengths) if tied is None else tied
+    if tied is None:
+        assert lengths is not None, "select_plan needs the lengths or their tied_lengths"
+        tied = tied_lengths(lengths)
+    total = tied
     allowed = counts <= MAX_LINES
     if eligible is not None and (allowed & eligible).any():
         allowed = allowed & eligible
@@ -136,13 +153,16 @@ def select_plan(
     if objective == "fewest_lines":
         fewest = counts == counts[allowed].min()
         total = np.where(fewest[:, None], total, np.inf)
-    flat = int(np.argmin(total))
+    flat = int(total.argmin())
     return flat // 4, flat % 4
 
 
 def tied_lengths(lengths: VariantLengths) -> FloatArray:
     """Path lengths rounded to :data:`_TIE_M`, so that ties break the same way every time."""
-    return np.asarray(np.round(lengths.total / _TIE_M) * _TIE_M)
+    # Array methods, not the np.* wrappers (the same operation, less call overhead): the
+    # search rounds and reduces a few hundred values at a time, a dozen times.
+    rounded: FloatArray = (lengths.total / _TIE_M).round() * _TIE_M
+    return rounded
 
 
 #: ``lengths(headings) -> (path lengths of the four variants, line counts)``.
@@ -280,6 +300,7 @@ def search_headings(
     )
     best_coverage = float(coverage[affordable].max()) if affordable.any() else 0.0
     chosen = (float(headings[best]), variant, float(coverage[best]))
+    chosen_at = best  # its index in the pool: the pool only grows at its end
     if refine:
         # Seeds may fall a little short of the rule: coverage varies fast between degrees.
         hopeful = affordable & (coverage >= best_coverage - SEED_SLACK)
@@ -288,28 +309,33 @@ def search_headings(
         # headings: the first round sweeps round the best-covering one too, for coverage.
         by_coverage = np.where(affordable, coverage, -np.inf)
         tops = _spread(np.lexsort((headings, -by_coverage)), headings, affordable, COVERAGE_SEEDS)
-        top_grid = np.round(headings[tops] / REFINE_STEP_DEG) * REFINE_STEP_DEG
+        top_grid = (headings[tops] / REFINE_STEP_DEG).round() * REFINE_STEP_DEG
         # Repeats are harmless: the sweep round them is made unique below.
         centres = np.concatenate([[headings[best]], top_grid, headings[picked]])
-        pool = _Pool(headings, lengths, counts, coverage, tied, least)
+        pool = _Pool(headings, counts, coverage, tied, least)
         for round_ in range(REFINE_ROUNDS):
             # On the 0.1° grid (an edge direction's neighbours too), around each centre.
-            grid = np.round(centres / REFINE_STEP_DEG) * REFINE_STEP_DEG
-            near = np.round((grid[:, None] + _OFFSETS).ravel() % 180.0, 9)
-            near = np.unique(near)  # sorted; then those not scored yet (np.setdiff1d, cheaper)
+            grid = (centres / REFINE_STEP_DEG).round() * REFINE_STEP_DEG
+            near = ((grid[:, None] + _OFFSETS).ravel() % 180.0).round(9)
+            near = _sorted_unique(near)  # then those not scored yet (np.setdiff1d, cheaper)
             # A set of plain floats, not np.isin: a few hundred values, and isin sorts both.
             scored = set(pool.headings.tolist())
-            near = near[np.fromiter((h not in scored for h in near.tolist()), bool, len(near))]
+            near = np.array([h for h in near.tolist() if h not in scored], dtype=float)
             near_lengths, near_counts = lengths_of(near) if len(near) else _no_scores(pool)
             pool = pool.extend(near, near_lengths, near_counts, np.full(len(near), np.nan))
             # Coverage for every scored heading that would beat the choice (the shortest
             # headings often trade coverage for length: the constrained optimum sits on the
             # coverage bound), also those a previous round scored for length only.
             key = _objective_key(pool.least, pool.counts, objective)
-            wanted = np.isnan(pool.coverage) & (key < key[pool.index(chosen[0])])
+            wanted = np.isnan(pool.coverage) & (key < key[chosen_at])
             if round_ == 0:
-                gap = np.abs((pool.headings[:, None] - top_grid + 90.0) % 180.0 - 90.0)
-                wanted |= np.isnan(pool.coverage) & (gap.min(axis=1) <= 9.5 * REFINE_STEP_DEG)
+                # Within the sweep of a best-covering heading: column by column, as the least
+                # gap along an axis of a few costs more (finite gaps: min <= t iff any <= t).
+                close = np.zeros(len(pool.headings), dtype=bool)
+                for top in top_grid.tolist():
+                    gap = np.abs((pool.headings - top + 90.0) % 180.0 - 90.0)
+                    close |= gap <= 9.5 * REFINE_STEP_DEG
+                wanted |= np.isnan(pool.coverage) & close
             if not wanted.any():
                 break
             pool.coverage[wanted] = coverage_of(pool.headings[wanted])
@@ -317,19 +343,17 @@ def search_headings(
             ok = (pool.counts <= MAX_LINES) & (
                 pool.coverage >= best_coverage - COVERAGE_SLACK - 1e-12
             )
-            i, variant = select_plan(
-                pool.lengths, pool.counts, objective, eligible=ok, tied=pool.tied
-            )
+            i, variant = select_plan(None, pool.counts, objective, eligible=ok, tied=pool.tied)
             moved = float(pool.headings[i]) != chosen[0]
             chosen = (float(pool.headings[i]), variant, float(pool.coverage[i]))
+            chosen_at = i
             if not moved:
                 break
             centres = np.array([chosen[0]])  # re-centre on a refined winner
     else:
-        pool = _Pool(headings, lengths, counts, coverage, tied, least)
-    alternatives = _best_covering(pool, objective, chosen[0])
+        pool = _Pool(headings, counts, coverage, tied, least)
+    alternatives, at = _best_covering(pool, objective, chosen[0])
     given_up = max(best_coverage - chosen[2], 0.0) * 100.0
-    at = [pool.index(h) for h, _ in alternatives]
     alternative_counts = tuple(int(pool.counts[i]) for i in at)
     alternative_coverage = tuple(float(pool.coverage[i]) for i in at)
     return HeadingChoice(
@@ -338,7 +362,7 @@ def search_headings(
         chosen[2],
         given_up,
         alternatives,
-        int(pool.counts[pool.index(chosen[0])]),
+        int(pool.counts[chosen_at]),
         alternative_counts,
         alternative_coverage,
         pool.headings,
@@ -355,8 +379,11 @@ ALTERNATIVES = 3
 
 def _best_covering(
     pool: _Pool, objective: Objective, chosen_deg: float
-) -> tuple[tuple[float, int], ...]:
-    """Return the best-covering scored headings, a seed gap apart, each with its best variant."""
+) -> tuple[tuple[tuple[float, int], ...], list[int]]:
+    """Return the best-covering scored headings, a seed gap apart, each with its best variant.
+
+    And their indices in the pool.
+    """
     coverage = np.where(
         (pool.counts <= MAX_LINES) & np.isfinite(pool.coverage), pool.coverage, -np.inf
     )
@@ -365,7 +392,7 @@ def _best_covering(
         (pool.headings, _objective_key(pool.least, pool.counts, objective), -coverage)
     )
     picked = _spread(order, pool.headings, np.isfinite(coverage), ALTERNATIVES)
-    return tuple((float(pool.headings[i]), int(np.argmin(total[i]))) for i in picked)
+    return tuple((float(pool.headings[i]), int(total[i].argmin())) for i in picked), picked
 
 
 def _spread(
@@ -394,17 +421,16 @@ def _spread(
 
 @dataclass(frozen=True, slots=True)
 class _Pool:
-    """Every heading scored so far; coverage NaN where it was not needed."""
+    """Every heading scored so far; coverage NaN where it was not needed.
+
+    Their lengths only as :func:`tied_lengths` (all the picks read).
+    """
 
     headings: FloatArray
-    lengths: VariantLengths
     counts: IntArray
     coverage: FloatArray
-    tied: FloatArray  # tied_lengths(lengths)
+    tied: FloatArray  # tied_lengths of the scorer's lengths
     least: FloatArray  # _least(tied)
-
-    def index(self, heading: float) -> int:
-        return int(np.nonzero(self.headings == heading)[0][0])
 
     def extend(
         self, headings: FloatArray, lengths: VariantLengths, counts: IntArray, coverage: FloatArray
@@ -412,11 +438,6 @@ class _Pool:
         tied = tied_lengths(lengths)
         return _Pool(
             np.concatenate([self.headings, headings]),
-            VariantLengths(
-                np.concatenate([self.lengths.working, lengths.working]),
-                np.concatenate([self.lengths.turns, lengths.turns]),
-                np.concatenate([self.lengths.transit, lengths.transit]),
-            ),
             np.concatenate([self.counts, counts]),
             np.concatenate([self.coverage, coverage]),
             np.concatenate([self.tied, tied]),

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit, _left, _line_count, _right
+from planner.kernel_helpers import _jit, _left, _line_count, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import shapely
 from shapely import MultiPolygon, Polygon
 
 from planner.coverage import Chains, convex_chains, covered_each_cell
@@ -185,10 +186,10 @@ def _place(
 ) -> _Placed:
     """Place one heading's lines in driving order, ending on the machine area's chains."""
     d = float(interval_m)
-    ring = np.asarray(area.exterior.coords)[:-1]  # only a non-convex field erodes into pieces
+    ring = shapely.get_coordinates(area.exterior)[:-1]  # np.asarray(.coords), cheaper
     mu, mv = to_sweep(ring[:, 0], ring[:, 1], heading_deg)
     machine = convex_chains(mu, mv)
-    outer = np.asarray(field_local.exterior.coords)[:-1]
+    outer = shapely.get_coordinates(field_local.exterior)[:-1]
     fu, fv = to_sweep(outer[:, 0], outer[:, 1], heading_deg)
     u_min, u_max = float(fu.min()), float(fu.max())
     skip = snake_skip(vehicle, d) if pattern == "snake" else 1

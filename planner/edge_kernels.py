@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit, _mn, _mx
+from planner.kernel_helpers import _jit, _mn, _mx
 from planner.order_kernels import _writable
 
 FloatArray = npt.NDArray[np.float64]

@@ -24,7 +24,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernels import _jit, _left, _mn, _mx, _right
+from planner.kernel_helpers import _jit, _left, _mn, _mx, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]

@@ -14,6 +14,7 @@ every scored heading, then at 0.1° around the shortest that keeps the rule.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -35,7 +36,7 @@ from planner.convex_fits import convex_machine_area, fit_headings
 from planner.errors import InvalidParameterError
 from planner.heading_coverage import convex_coverage
 from planner.line_ends import FittedLines, edge_loss_m2, end_reach_m
-from planner.lines import from_sweep, to_sweep
+from planner.lines import to_sweep
 from planner.types import Objective, Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -514,10 +515,15 @@ def _length_m(
     if len(fit.u) == 0:
         return 0.0
     total = float(np.abs(fit.v_end - fit.v_start).sum()) + float(fit.turns.length_m.sum())
+    # from_sweep's arithmetic on plain floats (the same IEEE operations, without 0-d arrays).
+    theta = math.radians(heading)
+    cos_t, sin_t = math.cos(theta), math.sin(theta)
     if start_xy is not None:
-        x, y = from_sweep(fit.u[0], fit.v_start[0], heading)
-        total += float(np.hypot(float(x) - start_xy[0], float(y) - start_xy[1]))
+        u, v = float(fit.u[0]), float(fit.v_start[0])
+        x, y = u * cos_t + v * sin_t, -u * sin_t + v * cos_t
+        total += float(np.hypot(x - start_xy[0], y - start_xy[1]))
     if finish_xy is not None:
-        x, y = from_sweep(fit.u[-1], fit.v_end[-1], heading)
-        total += float(np.hypot(float(x) - finish_xy[0], float(y) - finish_xy[1]))
+        u, v = float(fit.u[-1]), float(fit.v_end[-1])
+        x, y = u * cos_t + v * sin_t, -u * sin_t + v * cos_t
+        total += float(np.hypot(x - finish_xy[0], y - finish_xy[1]))
     return total

@@ -24,7 +24,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from planner.line_ends import end_reach_m, fitting_loss_m2
 from planner.lines import line_counts, to_sweep
+from planner.types import Vehicle
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -65,17 +67,94 @@ def convex_coverage(
     """
     headings = np.asarray(headings_deg, dtype=float)
     d = float(interval_m)
-    m = len(ring_xy)
-    x, y = ring_xy[:, 0], ring_xy[:, 1]
-    nxt = np.arange(1, m + 1) % m  # np.r_ costs more than the rest of this line
-    area = 0.5 * float(np.dot(x, y[nxt]) - np.dot(y, x[nxt]))
-    u_ring, v_ring = to_sweep(x, y, headings[:, None]) if sweep is None else sweep
+    area = ring_area_m2(ring_xy)
+    u_ring, v_ring = (
+        to_sweep(ring_xy[:, 0], ring_xy[:, 1], headings[:, None]) if sweep is None else sweep
+    )
     from planner import kernels  # numba: imported by the first plan that needs it
 
     excess = kernels.coverage_excess(u_ring, v_ring, d)
     if excess is None:  # a ring the kernel cannot vouch for
         excess = convex_excess(u_ring, v_ring, d)
     return np.asarray(np.clip(1.0 - excess / area, 0.0, 1.0))
+
+
+def estimated_coverage(
+    ring_xy: FloatArray,
+    headings_deg: FloatArray,
+    interval_m: float,
+    sweep: tuple[FloatArray, FloatArray],
+    *,
+    vehicle: Vehicle,
+    field_m2: float,
+    ring_m2: float | None = None,
+) -> FloatArray:
+    """Estimate the coverage of fitted lines at every heading: the heading search's score.
+
+    Straight lines' closed-form coverage, less what fitting them for ``vehicle`` will take
+    (:func:`planner.line_ends.fitting_loss_m2`: ends on the machine area, pulled back for the
+    turns) over ``field_m2``. Compiled (:func:`planner.kernels.estimated_coverage`), with
+    :func:`estimated_coverage_numpy` the reference and the fallback.
+
+    Parameters
+    ----------
+    ring_xy, headings_deg, interval_m, sweep
+        As :func:`convex_coverage` (``sweep`` required).
+    vehicle : Vehicle
+    field_m2 : float
+        The field's area [m²].
+    ring_m2 : float, optional
+        :func:`ring_area_m2` of ``ring_xy``, if the caller has it (the search scores twice).
+
+    Examples
+    --------
+    >>> from planner.vehicles import resolve_vehicle
+    >>> ring = np.array([[0.0, 0.0], [16.0, 0.0], [16.0, 20.0], [0.0, 20.0]])
+    >>> h = np.array([0.0, 90.0])
+    >>> sweep = to_sweep(ring[:, 0], ring[:, 1], h[:, None])
+    >>> estimated_coverage(ring, h, 4.0, sweep, vehicle=resolve_vehicle("hand_tractor"),
+    ...                    field_m2=320.0).round(4).tolist()
+    [0.9312, 0.9119]
+    """
+    from planner import kernels  # numba: imported by the first plan that needs it
+
+    estimate = kernels.estimated_coverage(
+        sweep[0],
+        sweep[1],
+        float(interval_m),
+        ring_area_m2(ring_xy) if ring_m2 is None else ring_m2,
+        field_m2=field_m2,
+        width_m=vehicle.width_m,
+        reach_m=end_reach_m(vehicle, float(interval_m)),
+    )
+    if estimate is None:  # a ring the kernel cannot vouch for
+        return estimated_coverage_numpy(
+            ring_xy, headings_deg, interval_m, sweep, vehicle=vehicle, field_m2=field_m2
+        )
+    return estimate
+
+
+def estimated_coverage_numpy(
+    ring_xy: FloatArray,
+    headings_deg: FloatArray,
+    interval_m: float,
+    sweep: tuple[FloatArray, FloatArray],
+    *,
+    vehicle: Vehicle,
+    field_m2: float,
+) -> FloatArray:
+    """:func:`estimated_coverage` in numpy: the reference for its compiled loop."""
+    widths = np.asarray(sweep[0].max(axis=1) - sweep[0].min(axis=1))
+    counts = line_counts(widths, interval_m)
+    loss = fitting_loss_m2(vehicle, interval_m, counts, widths) / field_m2
+    return np.asarray(convex_coverage(ring_xy, headings_deg, interval_m, sweep) - loss)
+
+
+def ring_area_m2(ring_xy: FloatArray) -> float:
+    """Return the shoelace area of a counter-clockwise ring [m²]."""
+    x, y = ring_xy[:, 0], ring_xy[:, 1]
+    nxt = np.arange(1, len(ring_xy) + 1) % len(ring_xy)  # np.r_ costs more than the rest
+    return 0.5 * float(np.dot(x, y[nxt]) - np.dot(y, x[nxt]))
 
 
 def convex_excess(u_ring: FloatArray, v_ring: FloatArray, d: float) -> FloatArray:

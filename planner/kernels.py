@@ -27,132 +27,26 @@ a warning is logged.
 
 from __future__ import annotations
 
-import logging
 import math
-from collections.abc import Callable
-from typing import TypeVar, cast
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
+from planner.kernel_helpers import (
+    _clip,
+    _jit,
+    _jit_counted_by_caller,
+    _left,
+    _line_count,
+    _mn,
+    _mx,
+    _right,
+    _sorted_into,
+    _stable_order_into,
+)
+
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
-
-_COUNT_EPS = 1e-9  # planner.lines._COUNT_EPS
-_log = logging.getLogger(__name__)
-
-_F = TypeVar("_F", bound=Callable[..., object])
-
-
-def _jit(f: _F) -> _F:
-    """Compile ``f`` on first call, cached on disk; division by zero gives inf/NaN as numpy.
-
-    Where no cache directory is writable (numba raises at decoration), compile in memory:
-    slow to start, but the plan is the same.
-    """
-    try:
-        return cast(_F, numba.njit(cache=True, error_model="numpy")(f))
-    except RuntimeError as exc:
-        _log.warning("planner kernels compile in memory, every process again: %s", exc)
-        return cast(_F, numba.njit(error_model="numpy")(f))
-
-
-@_jit
-def _mn(a: float, b: float) -> float:
-    """``np.minimum``: ``a`` on ties (and if ``a`` is NaN)."""
-    return a if (a <= b or a != a) else b
-
-
-@_jit
-def _mx(a: float, b: float) -> float:
-    """``np.maximum``: ``a`` on ties (and if ``a`` is NaN)."""
-    return a if (a >= b or a != a) else b
-
-
-@_jit
-def _clip(x: float, lo: float, hi: float) -> float:
-    """``np.clip`` of floats: ``min(max(x, lo), hi)`` with NaN kept."""
-    if x != x:
-        return x
-    y = x if x > lo else lo
-    return y if y < hi else hi
-
-
-@_jit
-def _right(keys: FloatArray, start: int, stop: int, q: float) -> int:
-    """``keys[start:stop].searchsorted(q, side="right") + start`` (keys sorted)."""
-    lo, hi = start, stop
-    while lo < hi:
-        mid = lo + ((hi - lo) >> 1)
-        if keys[mid] <= q:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@_jit
-def _left(keys: FloatArray, start: int, stop: int, q: float) -> int:
-    """``keys[start:stop].searchsorted(q, side="left") + start`` (keys sorted)."""
-    lo, hi = start, stop
-    while lo < hi:
-        mid = lo + ((hi - lo) >> 1)
-        if keys[mid] < q:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-#: Rings up to this many vertices are sorted in place by insertion (a field's few corners);
-#: longer ones by ``np.sort``, which allocates its result.
-_INSERTION_MAX = 32
-
-
-@_jit
-def _sorted_into(values: FloatArray, out: FloatArray) -> None:
-    """``out[:] = np.sort(values)``, without allocating for a short ``values``.
-
-    Floats sort the same whichever the algorithm: equal values are the same bits, but for
-    ``-0.0`` and ``0.0``, which compare equal and may come out in another order than
-    ``np.sort``'s (the tests compare bits with the zeros' signs ignored); NaN goes last as
-    in ``np.sort``.
-    """
-    n = len(values)
-    if n > _INSERTION_MAX:
-        out[:] = np.sort(values)
-        return
-    for i in range(n):
-        x = values[i]
-        j = i
-        # x before out[j - 1]: smaller, or a number before a NaN (np.sort's order).
-        while j > 0 and (x < out[j - 1] or (out[j - 1] != out[j - 1] and x == x)):
-            out[j] = out[j - 1]
-            j -= 1
-        out[j] = x
-
-
-@_jit
-def _stable_order_into(keys: IntArray, n: int, out: IntArray) -> None:
-    """``out[:n] = np.argsort(keys[:n], kind="mergesort")``: ties in their order."""
-    if n > _INSERTION_MAX:
-        out[:n] = np.argsort(keys[:n], kind="mergesort")
-        return
-    for i in range(n):
-        j = i
-        while j > 0 and keys[i] < keys[out[j - 1]]:
-            out[j] = out[j - 1]
-            j -= 1
-        out[j] = i
-
-
-@_jit
-def _line_count(width: float, d: float) -> int:
-    """:func:`planner.lines.line_counts` of one width."""
-    if width <= d:
-        return 1
-    return int(np.ceil((width - d) / d - _COUNT_EPS)) + 1
 
 
 @_jit
@@ -286,16 +180,23 @@ def _zone_missed(
     return acc
 
 
-@_jit
-def _coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float, out: FloatArray) -> bool:
+@_jit_counted_by_caller
+def _coverage_excess(
+    u_raw: FloatArray,
+    v_ring: FloatArray,
+    d: float,
+    out: FloatArray,
+    u_ring: FloatArray,
+    width: FloatArray,
+    scratch: FloatArray,
+) -> bool:
     """Missed area per heading of :func:`planner.heading_coverage.convex_coverage`.
 
     Writes ``out``; returns False (and leaves ``out`` unusable) if a chain's edges are out of
-    order, where ``searchsorted`` would not find what the numpy code's does.
+    order, where ``searchsorted`` would not find what the numpy code's does. ``u_ring``
+    (like ``u_raw``), ``width`` (a row of it) and ``scratch`` (14 rows of m) are scratch.
     """
     n_headings, m = u_raw.shape
-    u_ring = np.empty((n_headings, m))
-    width = np.empty(n_headings)
     for h in range(n_headings):
         u_min = u_raw[h, 0]
         for j in range(1, m):
@@ -306,13 +207,14 @@ def _coverage_excess(u_raw: FloatArray, v_ring: FloatArray, d: float, out: Float
         for j in range(1, m):
             w_max = _mx(w_max, u_ring[h, j])
         width[h] = w_max
-    big = 2.0 * width.max() + 1.0
+    w_all = width[0]
+    for h in range(1, n_headings):
+        w_all = _mx(w_all, width[h])  # width.max(): NaN wins, as there
+    big = 2.0 * w_all + 1.0
     # Per heading, scratch of at most m entries per chain and m - 1 intervals.
-    lk, lc, ls = np.empty(m), np.empty(m), np.empty(m)
-    hk, hc, hs = np.empty(m), np.empty(m), np.empty(m)
-    cuts = np.empty(m)
-    sk, sx0, sx1 = np.empty(m), np.empty(m), np.empty(m)
-    slo0, sslo, shi0, sshi = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    lk, lc, ls, hk, hc, hs = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4], scratch[5]
+    cuts, sk, sx0, sx1 = scratch[6], scratch[7], scratch[8], scratch[9]
+    slo0, sslo, shi0, sshi = scratch[10], scratch[11], scratch[12], scratch[13]
     for h in range(n_headings):
         base = h * big
         start = 0
@@ -534,11 +436,39 @@ def _length_aggregates(
         out[8, h], out[9, h], out[10, h] = p_last, v_last[0], v_last[1]
 
 
-def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, interval_m: float) -> FloatArray | None:
+@_jit
+def _less_fitting(
+    excess: FloatArray,
+    width: FloatArray,
+    d: float,
+    area: float,
+    field_m2: float,
+    width_m: float,
+    reach_m: float,
+) -> None:
+    """``excess`` becomes :func:`planner.heading_coverage.estimated_coverage`, in place.
+
+    The closed-form coverage less :func:`planner.line_ends.fitting_loss_m2` per field area,
+    with ``width`` each heading's width: numpy's operations on each element, in its order.
+    """
+    for h in range(len(excess)):
+        w = width[h]
+        n = float(_line_count(w, d))
+        last = _mn(_mx(w - (n - 1.0) * d, 0.0), d)
+        strips = _mx(n - 1.0, 0.0) * d + last
+        turn_ends = 2.0 * _mx(n - 2.0, 0.0) * d + d + last if n >= 2.0 else 0.0
+        loss = (strips * width_m + turn_ends * reach_m) / field_m2
+        excess[h] = _clip(1.0 - excess[h] / area, 0.0, 1.0) - loss
+
+
+def coverage_excess(
+    u_raw: FloatArray, v_ring: FloatArray, interval_m: float, widths: FloatArray | None = None
+) -> FloatArray | None:
     """Missed area per heading [m²], or None where the numpy code must decide (module doc).
 
     ``u_raw``, ``v_ring``: the ring in each heading's sweep frame [m]; ``interval_m``: the
-    line spacing [m].
+    line spacing [m]; ``widths``, if given, receives each heading's width
+    ``u.max() - u.min()`` [m].
     """
     if u_raw.size == 0:  # no heading or no vertex: the kernel reads no bounds
         return None
@@ -548,8 +478,29 @@ def coverage_excess(u_raw: FloatArray, v_ring: FloatArray, interval_m: float) ->
         np.ascontiguousarray(v_ring, dtype=np.float64),
         float(interval_m),
         out,
+        np.empty(u_raw.shape),
+        np.empty(len(u_raw)) if widths is None else widths,
+        np.empty((14, u_raw.shape[1])),
     )
     return out if ok else None
+
+
+def estimated_coverage(
+    u_raw: FloatArray,
+    v_ring: FloatArray,
+    interval_m: float,
+    area: float,
+    *,
+    field_m2: float,
+    width_m: float,
+    reach_m: float,
+) -> FloatArray | None:
+    """:func:`planner.heading_coverage.estimated_coverage` compiled, or None (numpy decides)."""
+    widths = np.empty(len(u_raw))
+    out = coverage_excess(u_raw, v_ring, interval_m, widths)
+    if out is not None:
+        _less_fitting(out, widths, float(interval_m), area, field_m2, width_m, reach_m)
+    return out
 
 
 def length_aggregates(
@@ -575,8 +526,8 @@ def length_aggregates(
 def warm_up() -> None:
     """Compile this module's kernels, or load them from the disk cache, on a tiny ring.
 
-    Only these: :func:`planner.warm_up.warm_up` warms every kernel module's (this module
-    is the one the others import, so it imports none of them).
+    Only these: :func:`planner.warm_up.warm_up` warms every kernel module's (a kernel module
+    imports none of the others, only :mod:`planner.kernel_helpers`).
     """
     ring_u = np.array([[0.0, 2.0, 2.0, 0.0]])
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])

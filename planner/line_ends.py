@@ -421,10 +421,10 @@ def machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon | MultiPolyg
     InvalidParameterError
         If nothing is left: the vehicle is wider than the field.
     """
-    half = vehicle.width_m / 2.0
     join: Literal["mitre", "round"] = "mitre" if _convex(field_local) else "round"
-    eroded = field_local.buffer(-half, join_style=join)
-    parts = [p for p in shapely.get_parts(eroded) if isinstance(p, Polygon) and p.area > 1e-9]
+    eroded = field_local.buffer(-vehicle.width_m / 2.0, join_style=join)
+    pieces = [eroded] if isinstance(eroded, Polygon) else shapely.get_parts(eroded)  # no copy
+    parts = [p for p in pieces if isinstance(p, Polygon) and p.area > 1e-9]
     if parts:
         # Slivers cut off where the bund bends sharply hold no line worth a trip.
         largest = max(p.area for p in parts)

@@ -15,9 +15,8 @@ from shapely import Polygon
 
 from planner import angles, general, validation
 from planner.fitted_choice import choose_convex
-from planner.heading_coverage import convex_coverage
-from planner.line_ends import fitting_loss_m2
-from planner.lines import line_counts, to_sweep
+from planner.heading_coverage import estimated_coverage, ring_area_m2
+from planner.lines import to_sweep
 from planner.ordering import VariantLengths, score_headings
 from planner.projection import LocalFrame, field_frame
 from planner.route_builder import RouteBuilder, add_fitted_lines
@@ -119,11 +118,8 @@ def plan_coverage(
 
     frame = field_frame(field_lonlat)
     field_local = frame.to_local(field_lonlat)
-    start_xy = validation.validate_point(
-        start_lonlat, input_name="start", frame=frame, field_local=field_local
-    )
-    finish_xy = validation.validate_point(
-        finish_lonlat, input_name="finish", frame=frame, field_local=field_local
+    start_xy, finish_xy = validation.validate_points(
+        start_lonlat, finish_lonlat, frame=frame, field_local=field_local
     )
     # The one pattern dispatch: spiral rounds here; boustrophedon and snake differ only in
     # the order of the lines (and so the turns), below.
@@ -174,7 +170,8 @@ def plan_coverage(
             started=started,
         )
 
-    ring_xy = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
+    # get_coordinates, not np.asarray(….coords): the same array at a third of the cost.
+    ring_xy = shapely.get_coordinates(shapely.orient_polygons(field_local).exterior)[:-1]
     headings = angles.candidate_headings(ring_xy, fixed_heading)
 
     # The ring rotated to the last headings scored: the search scores the coarse candidates
@@ -192,14 +189,20 @@ def plan_coverage(
         return score_headings(ring_xy, headings, interval, start_xy, finish_xy, sweep_of(headings))
 
     field_m2 = float(field_local.area)
+    ring_m2 = ring_area_m2(ring_xy)
 
     def coverage_of(headings: FloatArray) -> FloatArray:
         # Closed-form coverage of straight lines, less what fitting them for the vehicle
         # will take (ends on the machine area, pulled back for the turns).
-        sweep = sweep_of(headings)
-        widths = _widths(sweep[0])
-        loss = fitting_loss_m2(machine, interval, line_counts(widths, interval), widths) / field_m2
-        return convex_coverage(ring_xy, headings, interval, sweep) - loss
+        return estimated_coverage(
+            ring_xy,
+            headings,
+            interval,
+            sweep_of(headings),
+            vehicle=machine,
+            field_m2=field_m2,
+            ring_m2=ring_m2,
+        )
 
     choice = angles.search_headings(
         lengths_of, coverage_of, headings, goal, interval_m=interval, refine=fixed_heading is None
@@ -241,28 +244,6 @@ def plan_coverage(
         area_m2=area_m2,
         started=started,
     )
-
-
-#: Rings of up to this many vertices are measured column by column (:func:`_widths`).
-_FEW_VERTICES = 16
-
-
-def _widths(u_ring: FloatArray) -> FloatArray:
-    """``u_ring.max(axis=1) - u_ring.min(axis=1)``: each heading's width [m].
-
-    A few vertices (a convex field's corners) column by column with ``np.maximum`` and
-    ``np.minimum``: a reduction along a short axis costs ~10 µs on a few hundred headings,
-    a handful of whole-column steps a quarter of that. The same numbers: the greatest and
-    least of a row do not depend on the order they are compared in.
-    """
-    if u_ring.shape[1] > _FEW_VERTICES or u_ring.shape[1] == 0:
-        return np.asarray(u_ring.max(axis=1) - u_ring.min(axis=1))
-    columns = u_ring.T
-    high = low = columns[0]
-    for column in columns[1:]:
-        high = np.maximum(high, column)
-        low = np.minimum(low, column)
-    return np.asarray(high - low)
 
 
 def _plan_general(

@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 import shapely
 from pyproj import Geod, Transformer
+from shapely import Polygon
 from shapely.geometry.base import BaseGeometry
 
 from planner.errors import InvalidFieldError
@@ -190,7 +191,17 @@ def geodesic_area_m2(polygon_lonlat: BaseGeometry) -> float:
     pyproj signs each ring's area by its orientation, so the polygon is oriented first
     (exterior counter-clockwise, holes clockwise) for the holes to be subtracted.
     """
-    area, _ = WGS84.geometry_area_perimeter(shapely.orient_polygons(polygon_lonlat))
+    oriented = shapely.orient_polygons(polygon_lonlat)
+    if not isinstance(oriented, Polygon):
+        area, _ = WGS84.geometry_area_perimeter(oriented)
+        return abs(float(area))
+    # geometry_area_perimeter's own sum (exterior, then each hole), on the rings' coordinate
+    # arrays: it reaches a polygon through an exception and copies each ring's .xy.
+    area = 0.0
+    for ring in (oriented.exterior, *oriented.interiors):
+        lonlat = shapely.get_coordinates(ring)
+        ring_area, _ = WGS84.polygon_area_perimeter(lonlat[:, 0], lonlat[:, 1])
+        area += ring_area
     return abs(float(area))
 
 

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import shapely
-from shapely import Point, Polygon
+from shapely import Polygon
 
 from planner.errors import InvalidFieldError, InvalidParameterError
 from planner.projection import UTM_LAT_RANGE_DEG, LocalFrame, geodesic_area_m2
@@ -195,16 +195,47 @@ def validate_speed(speed_mps: Any) -> float:
     return value
 
 
-def validate_point(
-    point_lonlat: Any, *, input_name: str, frame: LocalFrame, field_local: Polygon
-) -> tuple[float, float] | None:
-    """Return the local ``(x, y)`` [m] of a start or finish point, or None if not given.
+def validate_points(
+    start_lonlat: Any, finish_lonlat: Any, *, frame: LocalFrame, field_local: Polygon
+) -> tuple[tuple[float, float] | None, tuple[float, float] | None]:
+    """Return the local ``(x, y)`` [m] of the start and the finish point, each None if not given.
+
+    Both are projected in one call (pyproj's fixed cost per call is most of a point's); the
+    errors come in the order of checking each point in turn: the start's form, then its
+    distance, then the finish's form and distance.
 
     Raises
     ------
     InvalidParameterError
-        If the point is malformed, not finite, or more than 5 km from the field.
+        If a point is malformed, not finite, or more than 5 km from the field.
     """
+    start = _lonlat("start", start_lonlat)
+    finish_error: InvalidParameterError | None = None
+    try:
+        finish = _lonlat("finish", finish_lonlat)
+    except InvalidParameterError as malformed:
+        finish, finish_error = None, malformed  # raised after the start's distance
+    given = [p for p in (start, finish) if p is not None]
+    projected: list[tuple[tuple[float, float], float]] = []
+    if given:
+        x, y = frame.to_local_xy([p[0] for p in given], [p[1] for p in given])
+        # Both distances in one call too; a point that does not project is infinitely far.
+        finite = np.isfinite(x + y)
+        distance_m = np.full(len(given), np.inf)
+        if finite.any():
+            at = shapely.points(np.stack([x[finite], y[finite]], axis=1))
+            distance_m[finite] = shapely.distance(field_local, at)
+        xy = zip(x.tolist(), y.tolist(), strict=True)
+        projected = list(zip(xy, distance_m.tolist(), strict=True))
+    start_xy = None if start is None else _near("start", start, *projected[0])
+    if finish_error is not None:
+        raise finish_error
+    finish_xy = None if finish is None else _near("finish", finish, *projected[-1])
+    return start_xy, finish_xy
+
+
+def _lonlat(input_name: str, point_lonlat: Any) -> tuple[float, float] | None:
+    """Return a start or finish point's ``(lon, lat)`` [deg] if well formed, None if not given."""
     if point_lonlat is None:
         return None
     if not isinstance(point_lonlat, (tuple, list)) or len(point_lonlat) != 2:
@@ -215,10 +246,15 @@ def validate_point(
         raise InvalidParameterError(
             input_name, f"({lon}, {lat}) is not a [longitude, latitude] in degrees"
         )
-    x, y = frame.to_local_xy(lon, lat)
-    xy = (float(x), float(y))
-    distance_m = field_local.distance(Point(xy)) if math.isfinite(xy[0] + xy[1]) else math.inf
+    return lon, lat
+
+
+def _near(
+    input_name: str, lonlat: tuple[float, float], xy: tuple[float, float], distance_m: float
+) -> tuple[float, float]:
+    """Return ``xy`` if the point, ``distance_m`` from the field, is within 5 km of it."""
     if not distance_m <= MAX_POINT_DISTANCE_M:
+        lon, lat = lonlat
         raise InvalidParameterError(
             input_name,
             f"({lon:.6f}, {lat:.6f}) is {distance_m / 1000:,.1f} km from the field; "

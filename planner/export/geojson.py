@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+import shapely
 from shapely import Polygon
 
 from planner.errors import InvalidFieldError
@@ -53,14 +54,14 @@ def plan_to_geojson(plan: CoveragePlan, *, name: str | None = None) -> dict[str,
     if len(lon) >= 2:
         path = [[x, y] for x, y in zip(lon, lat, strict=True)]
         features.append(_feature({"type": "LineString", "coordinates": path}, {"kind": "path"}))
-    features.extend(
+    features += [  # a list comprehension: a generator resumes once per waypoint
         {
             "type": "Feature",
             "properties": {"kind": "waypoint", "seq": i, "role": role, "line": line},
             "geometry": {"type": "Point", "coordinates": [x, y]},
         }
         for i, x, y, role, line in zip(seq, lon, lat, roles, lines, strict=True)
-    )
+    ]
     stats = plan.stats.as_dict()
     del stats["planning_ms"]
     properties = {"name": name, "interval_m": plan.interval_m, **stats}
@@ -175,4 +176,9 @@ def _feature(geometry: dict[str, Any], properties: dict[str, Any]) -> dict[str, 
 
 def _polygon(polygon: Polygon) -> dict[str, Any]:
     rings = [polygon.exterior, *polygon.interiors]
-    return {"type": "Polygon", "coordinates": [[list(c) for c in r.coords] for r in rings]}
+    # The rings' coordinates as lists of [x, y] (or [x, y, z]) floats, as list(c) per point.
+    z = polygon.has_z
+    return {
+        "type": "Polygon",
+        "coordinates": [shapely.get_coordinates(r, include_z=z).tolist() for r in rings],
+    }

@@ -10,10 +10,11 @@ import pytest
 import shapely
 from shapely import MultiPoint
 
-from planner import kernels
-from planner.heading_coverage import convex_excess
+from planner import kernel_helpers, kernels
+from planner.heading_coverage import convex_excess, estimated_coverage, estimated_coverage_numpy
 from planner.lines import to_sweep
 from planner.ordering import HeadingAggregates, convex_aggregates
+from planner.vehicles import resolve_vehicle
 
 FloatArray = np.ndarray
 
@@ -55,6 +56,25 @@ def test_coverage_kernel_equals_numpy(seed: int) -> None:
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
+def test_estimated_coverage_kernel_equals_numpy(seed: int) -> None:
+    """The search's estimate (coverage less the fitting) and the widths, bit for bit."""
+    rng = np.random.default_rng(300 + seed)
+    vehicles = [resolve_vehicle("hand_tractor"), resolve_vehicle("small_tractor")]
+    for k, ring in enumerate(convex_rings(seed, 100)):
+        d = float(rng.choice([0.5, 1.0, 1.5, 2.0, 2.5, 4.0, 7.3, 30.0]))
+        h = headings(rng)
+        sweep = to_sweep(ring[:, 0], ring[:, 1], h[:, None])
+        field_m2 = float(shapely.Polygon(ring).area) * rng.uniform(0.9, 1.1)
+        vehicle = vehicles[k % 2]
+        fast = estimated_coverage(ring, h, d, sweep, vehicle=vehicle, field_m2=field_m2)
+        slow = estimated_coverage_numpy(ring, h, d, sweep, vehicle=vehicle, field_m2=field_m2)
+        assert same_bits(slow, fast)
+        widths = np.empty(len(h))
+        assert kernels.coverage_excess(sweep[0], sweep[1], d, widths) is not None
+        assert same_bits(sweep[0].max(axis=1) - sweep[0].min(axis=1), widths)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
 def test_length_kernel_equals_numpy(seed: int) -> None:
     rng = np.random.default_rng(200 + seed)
     for ring in convex_rings(seed, 150):
@@ -75,22 +95,22 @@ def test_coverage_kernel_declines_chains_out_of_order() -> None:
     assert kernels.coverage_excess(u, v, 1.0) is None
 
 
-@pytest.mark.parametrize("n", [0, 1, 2, 5, 32, 33, 80])
+@pytest.mark.parametrize("n", [0, 1, 2, 5, 32, 33, 80, 257])
 def test_sorts_without_allocating_equal_numpy(n: int) -> None:
     """The kernels' in-place sorts give np.sort's values and the stable argsort's order."""
     rng = np.random.default_rng(n)
     for _ in range(20):
         values = np.round(rng.normal(size=n), 1)  # ties
         if n > 2:
-            values[rng.integers(n)] = np.nan  # np.sort puts NaN last
+            values[rng.integers(n, size=1 + n // 40)] = np.nan  # np.sort puts NaN last
         out = np.empty(n)
-        kernels._sorted_into(values, out)
+        kernel_helpers._sorted_into(values, out)
         assert np.array_equal(out, np.sort(values), equal_nan=True)
         # Bit for bit but for the sign of zeros (-0.0 + 0.0 is 0.0): ±0 may swap places.
         assert same_bits(out + 0.0, np.sort(values) + 0.0)
         keys = rng.integers(0, 4, size=n + 3)  # only the first n are sorted
         order = np.full(n + 3, -1, dtype=np.int64)
-        kernels._stable_order_into(keys, n, order)
+        kernel_helpers._stable_order_into(keys, n, order)
         assert order[:n].tolist() == np.argsort(keys[:n], kind="mergesort").tolist()
 
 

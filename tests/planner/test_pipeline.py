@@ -329,16 +329,3 @@ def test_non_convex_field_and_field_with_hole_are_planned_inside(
 def test_convex_field_keeps_one_cell(square_field: Polygon) -> None:
     plan = plan_coverage(square_field, interval_m=4.0)
     assert len(plan.cells_lonlat) == 1
-
-
-@pytest.mark.parametrize("vertices", [1, 3, 4, 16, 17, 40])
-def test_widths_equal_numpy_reduction(vertices: int) -> None:
-    """Column by column or along the axis, each heading's width is the same to the bit."""
-    from planner.pipeline import _widths
-
-    rng = np.random.default_rng(vertices)
-    u = np.round(rng.normal(size=(50, vertices)) * 100.0, 1)  # ties between vertices
-    u[0] = 0.0
-    u[1, ::2] = -0.0  # signed zeros
-    expected = u.max(axis=1) - u.min(axis=1)
-    assert np.array_equal(_widths(u).view(np.int64), expected.view(np.int64))

@@ -125,6 +125,21 @@ def test_malformed_point(square_field: Polygon, name: str, value: object) -> Non
         plan(square_field, **{f"{name}_lonlat": value})
 
 
+def test_points_are_checked_in_turn(square_field: Polygon) -> None:
+    """The start's form and distance first, then the finish's (both projected in one call)."""
+    far, near, malformed = (BALI[0] + 0.1, BALI[1]), BALI, (1.0,)
+    with pytest.raises(InvalidParameterError, match=r"^start: .* km from the field"):
+        plan(square_field, start_lonlat=far, finish_lonlat=malformed)
+    with pytest.raises(InvalidParameterError, match=r"^start: must be a \[lon, lat\] pair"):
+        plan(square_field, start_lonlat=malformed, finish_lonlat=far)
+    with pytest.raises(InvalidParameterError, match=r"^finish: must be a \[lon, lat\] pair"):
+        plan(square_field, start_lonlat=near, finish_lonlat=malformed)
+    with pytest.raises(InvalidParameterError, match=r"^finish: .* km from the field"):
+        plan(square_field, start_lonlat=near, finish_lonlat=far)
+    both = plan(square_field, start_lonlat=near, finish_lonlat=near)
+    assert [w.role for w in both.waypoints][:: len(both.waypoints) - 1] == ["start", "finish"]
+
+
 @pytest.mark.parametrize("angle", [-1, 180, 360, math.nan])
 def test_angle_out_of_range(square_field: Polygon, angle: float) -> None:
     with pytest.raises(InvalidParameterError, match="^angle_deg: must be"):

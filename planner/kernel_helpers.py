@@ -1,0 +1,180 @@
+"""Compiled helpers the planner's kernels share: the decorators, numpy's scalar rules, sorts.
+
+Each helper is numpy's operation on scalars, with its NaN and tie rules (``np.minimum``,
+``np.maximum``, ``np.clip``, ``searchsorted``, ``np.sort``), so a kernel built from them
+computes what its numpy reference does, to the last bit (see :mod:`planner.kernels`).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+_COUNT_EPS = 1e-9  # planner.lines._COUNT_EPS
+_log = logging.getLogger(__name__)
+
+_F = TypeVar("_F", bound=Callable[..., object])
+
+
+def _jit(f: _F) -> _F:
+    """Compile ``f`` on first call, cached on disk; division by zero gives inf/NaN as numpy.
+
+    Where no cache directory is writable (numba raises at decoration), compile in memory:
+    slow to start, but the plan is the same.
+    """
+    try:
+        return cast(_F, numba.njit(cache=True, error_model="numpy")(f))
+    except RuntimeError as exc:
+        _log.warning("planner kernels compile in memory, every process again: %s", exc)
+        return cast(_F, numba.njit(error_model="numpy")(f))
+
+
+def _jit_counted_by_caller(f: _F) -> _F:
+    """:func:`_jit` without reference counting, for a kernel that allocates nothing.
+
+    Numba counts references to every array a compiled function passes on (an atomic
+    increment and decrement per array per call): the coverage kernel passes nine scratch
+    arrays per strip, and those counts took a third of its time. Its caller allocates the
+    scratch and holds every array for the call, so the kernel needs no counts (numba's
+    ``_nrt`` option, as numba's own sorts use it; not in its type stubs). The arithmetic is
+    the same.
+    """
+    uncounted: dict[str, Any] = {"_nrt": False}
+    try:
+        return cast(_F, numba.njit(cache=True, error_model="numpy", **uncounted)(f))
+    except RuntimeError as exc:
+        _log.warning("planner kernels compile in memory, every process again: %s", exc)
+        return cast(_F, numba.njit(error_model="numpy", **uncounted)(f))
+
+
+@_jit
+def _mn(a: float, b: float) -> float:
+    """``np.minimum``: ``a`` on ties (and if ``a`` is NaN)."""
+    return a if (a <= b or a != a) else b
+
+
+@_jit
+def _mx(a: float, b: float) -> float:
+    """``np.maximum``: ``a`` on ties (and if ``a`` is NaN)."""
+    return a if (a >= b or a != a) else b
+
+
+@_jit
+def _clip(x: float, lo: float, hi: float) -> float:
+    """``np.clip`` of floats: ``min(max(x, lo), hi)`` with NaN kept."""
+    if x != x:
+        return x
+    y = x if x > lo else lo
+    return y if y < hi else hi
+
+
+@_jit
+def _right(keys: FloatArray, start: int, stop: int, q: float) -> int:
+    """``keys[start:stop].searchsorted(q, side="right") + start`` (keys sorted)."""
+    lo, hi = start, stop
+    while lo < hi:
+        mid = lo + ((hi - lo) >> 1)
+        if keys[mid] <= q:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@_jit
+def _left(keys: FloatArray, start: int, stop: int, q: float) -> int:
+    """``keys[start:stop].searchsorted(q, side="left") + start`` (keys sorted)."""
+    lo, hi = start, stop
+    while lo < hi:
+        mid = lo + ((hi - lo) >> 1)
+        if keys[mid] < q:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+#: Rings up to this many vertices are sorted in place by insertion (a field's few corners);
+#: longer ones by heapsort (np.sort would allocate its result: the coverage kernel, which
+#: sorts, runs without reference counts and so cannot allocate).
+_INSERTION_MAX = 32
+
+
+@_jit
+def _before(a: float, b: float) -> bool:
+    """Return whether ``a`` sorts before ``b`` in ``np.sort``: smaller, or a number before NaN."""
+    return a < b or (b != b and a == a)
+
+
+@_jit
+def _sift_down(out: FloatArray, root: int, end: int) -> None:
+    """Restore the heap (greatest first) below ``root`` within ``out[:end]``."""
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        if child + 1 < end and _before(out[child], out[child + 1]):
+            child += 1
+        if not _before(out[root], out[child]):
+            return
+        out[root], out[child] = out[child], out[root]
+        root = child
+
+
+@_jit
+def _sorted_into(values: FloatArray, out: FloatArray) -> None:
+    """``out[:] = np.sort(values)``, without allocating.
+
+    Floats sort the same whichever the algorithm: equal values are the same bits, but for
+    ``-0.0`` and ``0.0``, which compare equal and may come out in another order than
+    ``np.sort``'s (the tests compare bits with the zeros' signs ignored); NaN goes last as
+    in ``np.sort``.
+    """
+    n = len(values)
+    if n > _INSERTION_MAX:
+        for i in range(n):  # not out[:] = values: a slice copy may allocate
+            out[i] = values[i]
+        for root in range(n // 2 - 1, -1, -1):
+            _sift_down(out, root, n)
+        for end in range(n - 1, 0, -1):
+            out[0], out[end] = out[end], out[0]
+            _sift_down(out, 0, end)
+        return
+    for i in range(n):
+        x = values[i]
+        j = i
+        # x before out[j - 1]: smaller, or a number before a NaN (np.sort's order).
+        while j > 0 and (x < out[j - 1] or (out[j - 1] != out[j - 1] and x == x)):
+            out[j] = out[j - 1]
+            j -= 1
+        out[j] = x
+
+
+@_jit
+def _stable_order_into(keys: IntArray, n: int, out: IntArray) -> None:
+    """``out[:n] = np.argsort(keys[:n], kind="mergesort")``: ties in their order."""
+    if n > _INSERTION_MAX:
+        out[:n] = np.argsort(keys[:n], kind="mergesort")
+        return
+    for i in range(n):
+        j = i
+        while j > 0 and keys[i] < keys[out[j - 1]]:
+            out[j] = out[j - 1]
+            j -= 1
+        out[j] = i
+
+
+@_jit
+def _line_count(width: float, d: float) -> int:
+    """:func:`planner.lines.line_counts` of one width."""
+    if width <= d:
+        return 1
+    return int(np.ceil((width - d) / d - _COUNT_EPS)) + 1
