@@ -4,9 +4,10 @@ tillpath's processes fork their children from one ``multiprocessing`` fork serve
 imported this module (and Dask, :mod:`app.forkserver`): the children that plan a large field
 within a budget (:mod:`app.budget`) and the workers of the local Dask cluster
 (:func:`app.jobs.engine.start_local_cluster`). Each child starts with the planner, its compiled
-kernels and ``plan-batch``'s task in memory, shared copy-on-write, instead of paying for them
-itself: about 0.7 s of a core per child (``import planner`` with scipy 0.3 s, ``numba`` and the
-kernels' disk cache 0.4 s), and one copy of the kernels' ~115 MiB of machine code.
+kernels, ``plan-batch``'s task and the warm-up plugin in memory, shared copy-on-write, instead
+of paying for them itself: about 0.7 s of a core per child (``import planner`` with scipy
+0.3 s, ``numba`` and the kernels' disk cache 0.4 s), and one copy of the kernels' ~115 MiB of
+machine code.
 
 The job kinds are not loaded here: they bring the web app, the simulator and scipy.stats (over
 a second of imports), which ``plan-batch``'s workers never need; the server's engine imports
@@ -17,6 +18,7 @@ loads: no thread, socket, database connection or file stays open across the fork
 """
 
 import app.cli.batch_tasks  # noqa: F401  (plan-batch's task)
+import app.kernels_plugin  # noqa: F401  (unpickled by every worker as the plugin registers)
 from planner.warm_up import warm_up
 
 warm_up()

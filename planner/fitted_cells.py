@@ -190,6 +190,11 @@ CLOSE_PLANS = 1
 ESTIMATE_SLACKS = 1.0
 #: ... and is fitted if it is estimated this share shorter than the choice (issue 9's 1 %).
 SHORTER_SHARE = 0.01
+#: A heading is fitted, too, if its estimate, erring as favourably as any fitted heading's,
+#: would cover this many rule slacks more than the best fitted one (then the rule would drop
+#: the choice; the estimate errs by about a slack, so a smaller margin fits a heading on
+#: many fields for little gain: a fit is most of a plan's time).
+BEATING_SLACKS = 1.0
 
 
 @functools.lru_cache(maxsize=256)
@@ -248,6 +253,7 @@ def choose_cells(
     fit: Callable[[CellPlan], FittedCells],
     vehicle: Vehicle,
     interval_m: float,
+    planned: int | None = None,
 ) -> tuple[FittedCells, float]:
     """R5 on fitted lines, fitting as few headings as it can.
 
@@ -262,7 +268,11 @@ def choose_cells(
 
     ``covers[i]`` is heading ``i`` before its cells are ordered, ``cheap(i)`` its cheap
     plan: a heading whose length the rule never asks for (one that covers too little) is
-    never ordered.
+    never ordered. Only the first ``planned`` headings (default: all) are planned for length;
+    the others were decomposed because they may cover more (:mod:`planner.coverage_rivals`)
+    and are fitted only when the calibrated estimates say they may beat the best fitted one
+    (the calibrated rivals, and the one that beats it by :data:`BEATING_SLACKS` erring as
+    favourably as any fitted heading's estimate).
 
     Returns
     -------
@@ -278,8 +288,9 @@ def choose_cells(
             lengths[i] = estimate_m(cheap(i), vehicle, interval_m)
         return lengths[i]
 
-    best_m2 = max(covered)
-    eligible = [i for i, m2 in enumerate(covered) if m2 >= best_m2 - slack_m2]
+    planned = len(covers) if planned is None else planned
+    best_m2 = max(covered[:planned])
+    eligible = [i for i, m2 in enumerate(covered[:planned]) if m2 >= best_m2 - slack_m2]
 
     def lines(i: int) -> float:
         return float(covers[i].line_count) if objective == "fewest_lines" else 0.0
@@ -305,11 +316,20 @@ def choose_cells(
         if i not in fitted and covers[i].covered_m2 - turns[i] * lost > best_fitted + slack_m2
     ]
     fitted.update({i: fit(cheap(i)) for i in rivals})
+    # The fitted headings measure the estimate's error: the heading that, erring as
+    # favourably as the most favourable of them, would cover a slack more than the best
+    # fitted one (so would drop the choice from the rule) is fitted too.
+    low_m2 = min(covered[i] - f.covered_m2 for i, f in fitted.items())
+    top_m2 = max(f.covered_m2 for f in fitted.values()) + BEATING_SLACKS * slack_m2
+    beating = [i for i in range(len(covers)) if i not in fitted and covered[i] - low_m2 > top_m2]
+    if beating:
+        top = max(beating, key=lambda i: (covered[i], -i))
+        fitted[top] = fit(cheap(top))
     # The estimate's error is about the rule's slack: the shortest heading that it puts up
     # to one more slack below the best and that would save over 1 % is fitted too.
     shorter = [
         i
-        for i in range(len(covers))
+        for i in range(planned)
         if i not in fitted
         and lines(i) <= lines(first)
         and covered[i] >= best_m2 - (1.0 + ESTIMATE_SLACKS) * slack_m2

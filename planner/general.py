@@ -24,9 +24,16 @@ from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
 from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
+from planner.coverage_rivals import coverage_rivals, ragged_deficit_m2
 from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
-from planner.fitted_cells import FittedCells, choose_cells, fit_candidate
+from planner.fitted_cells import (
+    FittedCells,
+    choose_cells,
+    estimate_m2,
+    fit_candidate,
+    turn_change_m,
+)
 from planner.fitted_choice import edge_headings
 from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
 from planner.heading_search import score_headings
@@ -217,6 +224,21 @@ def plan_general(
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
         prepared = [sweep_rings(p) for p in parts]
         covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
+        planned = len(ranked)
+        if len(ranked) > 1:
+            # R5: the ragged estimate can miss the best-covering heading; those it may have
+            # misjudged (by as much as it misjudged the ones above) are decomposed too.
+            ragged = ragged_deficit_m2(
+                scores.missed_m2, scores.pieces, scores.turn_backs, turn_change_m(machine, d)[1], d
+            )
+            parts_m2 = float(sum(p.area for p in parts))
+            known = {
+                a: parts_m2 - estimate_m2(c, machine, d)
+                for a, c in zip(ranked, covers, strict=True)
+            }
+            rivals = coverage_rivals(ragged, known)
+            covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in rivals]
+            ranked += rivals
         orders: dict[int, CellPlan] = {}
 
         def cheap(i: int) -> CellPlan:
@@ -251,7 +273,14 @@ def plan_general(
             )
 
         chosen, given_up_m2 = choose_cells(
-            covers, cheap, objective, slack_m2=slack_m2, fit=fit, vehicle=machine, interval_m=d
+            covers,
+            cheap,
+            objective,
+            slack_m2=slack_m2,
+            fit=fit,
+            vehicle=machine,
+            interval_m=d,
+            planned=planned,
         )
         fits = chosen.fits
         best = chosen.plan

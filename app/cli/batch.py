@@ -162,7 +162,7 @@ def run_batch(
     from app.cli.batch_read import iter_field_chunks, open_fields
     from app.cli.batch_tasks import plan_records
     from app.jobs.engine import start_local_cluster
-    from app.jobs.kernels_plugin import KernelWarmUp
+    from app.kernels_plugin import KernelWarmUp
 
     source = open_fields(fields, layer=layer)
     # The scheduler runs in this process: its INFO lines would drown the progress bar.

@@ -52,7 +52,7 @@ QUIET_CLUSTER: Final[dict[str, object]] = {
 #: The local cluster's workers are forked from the process's fork server, which has loaded
 #: Dask and the planner (:mod:`app.forkserver`), rather than spawned as fresh interpreters. A
 #: worker that a nanny restarts later is spawned (this setting applies while the cluster
-#: starts) and loads the kernels through :class:`app.jobs.kernels_plugin.KernelWarmUp`.
+#: starts) and loads the kernels through :class:`app.kernels_plugin.KernelWarmUp`.
 FORKED_WORKERS: Final[dict[str, object]] = {
     "distributed.worker.multiprocessing-method": "forkserver"
 }
@@ -162,7 +162,7 @@ class JobEngine:
             self.client = Client(
                 self.scheduler_address, timeout=CONNECT_TIMEOUT_S, set_as_default=False
             )
-        from app.jobs.kernels_plugin import KernelWarmUp
+        from app.kernels_plugin import KernelWarmUp
 
         # The one warm-up of the workers: the planner's kernels, then the job kinds' modules.
         # A plugin rather than client.run(...): it reaches every worker, present and future

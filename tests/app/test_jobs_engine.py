@@ -43,7 +43,7 @@ def test_the_engine_warms_its_workers_once_by_the_plugin(monkeypatch: pytest.Mon
     import distributed
 
     from app.jobs.engine import JobEngine
-    from app.jobs.kernels_plugin import KernelWarmUp
+    from app.kernels_plugin import KernelWarmUp
 
     client = mock.MagicMock()
     monkeypatch.setattr(distributed, "Client", mock.MagicMock(return_value=client))
@@ -63,7 +63,7 @@ def test_the_plugin_imports_the_job_kinds_only_when_asked():
     import sys
 
     code = (
-        "import sys; from app.jobs.kernels_plugin import _warm_up; "
+        "import sys; from app.kernels_plugin import _warm_up; "
         "_warm_up(False); print('app.jobs.simulations' in sys.modules); "
         "_warm_up(True); print('app.jobs.simulations' in sys.modules)"
     )

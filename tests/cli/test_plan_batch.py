@@ -19,7 +19,7 @@ from pyproj import Transformer
 
 from app.cli.batch import run_batch
 from app.cli.batch_read import BatchInputError, iter_field_chunks, open_fields
-from app.jobs.kernels_plugin import NAME
+from app.kernels_plugin import NAME
 from tests.conftest import FIELDS_DIR
 
 TILLPATH = [sys.executable, "-c", "from app.cli import main; main()"]

@@ -1,10 +1,13 @@
-"""Issue 9 item 5 on non-convex fields: the search never loses to a fixed heading by over 1 %.
+"""Issue 9 item 5 on non-convex fields: the search keeps R5 and never loses to a fixed heading.
 
 Every fixed heading (every 1°, 0–179) is planned with ``angle_deg`` as a user would; the rule
-(R5) compares only those whose coverage is within 0.2 pp of the best fixed heading's, and the
-searched plan must be no more than 1 % longer than the shortest of them. The fields are star
-fields of the property tests (:func:`bench.shapes.star_field`), with holes,
-at intervals a tenth to a fortieth of their size; the default vehicle (the hand tractor).
+(R5) compares only those whose coverage is within 0.2 pp of the best fixed heading's: the
+searched plan must cover no less than the best one's coverage minus that slack, and be no more
+than 1 % longer than the shortest of them. The fields are star fields of the property tests
+(:func:`bench.shapes.star_field`), with holes, at intervals a tenth to a
+fortieth of their size, with the default vehicle (the hand tractor); and real fields at 4 m
+on which the search covered over 0.2 pp less than a fixed heading (its few headings
+decomposed all missed the best-covering one).
 
 Each case plans 181 fields' worth (about 5 s a case on a quiet machine): the first few of a
 seeded draw that plan quickly, and two that a 25-field check of the search found 1.4 % and
@@ -14,33 +17,72 @@ greedy cell order).
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
+import shapely
+from shapely import Polygon
 
 from bench.shapes import LOSS_SHARE, NON_CONVEX_CASES, field_from_local, star_field
 from planner import angles, plan_coverage
+from tests.conftest import FIELDS_DIR
+from tests.planner.field_files import shared_feature
 
 #: (vertices, seed, size [m], holes asked for, interval [m]), shared with
 #: ``bench.heading_brute_force_non_convex --cases``.
 CASES = [pytest.param(*case, id=name) for name, case in NON_CONVEX_CASES.items()]
+#: Real fields: (dataset, feature id, vehicle); the search covered 0.284 pp and 2.086 pp less
+#: than the best fixed heading before the misjudged headings were decomposed.
+REAL_CASES = [
+    pytest.param("germany_2018_2019", "germany_2018_2019-65", "hand_tractor", id="germany-65"),
+    pytest.param(
+        "germany_2018_2019", "germany_2018_2019-37", "small_tractor", id="germany-37-small"
+    ),
+]
+#: The interval of the real fields [m] (their benchmarks').
+REAL_INTERVAL_M = 4.0
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize(("n", "seed", "size_m", "holes", "interval_m"), CASES)
-def test_search_is_within_one_percent_of_every_fixed_heading_keeping_the_rule(
-    n: int, seed: int, size_m: float, holes: int, interval_m: float
-) -> None:
-    local = star_field(n, seed, size_m, holes)
-    field = field_from_local(list(local.exterior.coords), [list(h.coords) for h in local.interiors])
-    searched = plan_coverage(field, interval_m=interval_m)
+def assert_rule(field: Polygon, interval_m: float, vehicle: str) -> None:
+    """The searched plan keeps R5 against every 1° fixed heading and is within 1 % of them."""
+    searched = plan_coverage(field, interval_m=interval_m, vehicle=vehicle)
     fixed = [
-        plan_coverage(field, interval_m=interval_m, angle_deg=float(h)).stats
+        plan_coverage(field, interval_m=interval_m, vehicle=vehicle, angle_deg=float(h)).stats
         for h in np.arange(0.0, 180.0, 1.0)
     ]
-    best_coverage = max(s.coverage_ratio for s in fixed)
+    best = max(fixed, key=lambda s: s.coverage_ratio)
+    assert searched.stats.coverage_ratio >= best.coverage_ratio - angles.COVERAGE_SLACK, (
+        f"{searched.stats.angle_deg:.1f}° covers {searched.stats.coverage_ratio:.5f}, "
+        f"{best.angle_deg:.1f}° {best.coverage_ratio:.5f}"
+    )
+    # The rule is relative to the best heading: where the search found one between the 1°
+    # headings that covers more, a 1° heading 0.2 pp below it is no candidate.
+    best_coverage = max(best.coverage_ratio, searched.stats.coverage_ratio)
     keeping = [s for s in fixed if s.coverage_ratio >= best_coverage - angles.COVERAGE_SLACK]
+    if not keeping:
+        return  # no 1° heading keeps the rule: the searched plan is the only candidate
     shortest = min(keeping, key=lambda s: s.path_length_m)
     assert searched.stats.path_length_m <= shortest.path_length_m * (1.0 + LOSS_SHARE), (
         f"{searched.stats.angle_deg:.1f}° is {searched.stats.path_length_m:.1f} m, "
         f"{shortest.angle_deg:.1f}° {shortest.path_length_m:.1f} m"
     )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("n", "seed", "size_m", "holes", "interval_m"), CASES)
+def test_search_keeps_the_rule_and_is_within_one_percent_of_every_fixed_heading(
+    n: int, seed: int, size_m: float, holes: int, interval_m: float
+) -> None:
+    local = star_field(n, seed, size_m, holes)
+    field = field_from_local(list(local.exterior.coords), [list(h.coords) for h in local.interiors])
+    assert_rule(field, interval_m, "hand_tractor")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("dataset", "feature_id", "vehicle"), REAL_CASES)
+def test_search_keeps_the_rule_on_real_fields(dataset: str, feature_id: str, vehicle: str) -> None:
+    feature = shared_feature(FIELDS_DIR / f"{dataset}.geojson", feature_id)
+    field = shapely.from_geojson(json.dumps(feature["geometry"]))
+    assert isinstance(field, Polygon)
+    assert_rule(field, REAL_INTERVAL_M, vehicle)

@@ -7,6 +7,10 @@ and the kernels' disk cache (about 0.35 s), or their compile where the cache is 
 (:func:`app.jobs.runner.warm_up`: the app's database stack, about 1.1 s of CPU once the kernels
 are in), which a planning batch does not need. They load in a background thread: the worker is
 ready at once, and a task that needs them before they are loaded waits for them.
+
+The module lives outside :mod:`app.jobs` on purpose: a worker unpickles the plugin by importing
+its module, and importing anything in ``app.jobs`` imports the package, which brings the web app
+(about 1 s of a core a worker, inside ``plan-batch``'s run).
 """
 
 from __future__ import annotations
