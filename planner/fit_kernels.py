@@ -8,7 +8,7 @@ values (the paper field: about a fifth of a 4 ms plan). These are the same compu
 loop per turn or heading, compiled by numba (:mod:`planner.kernels`' conventions: cached on
 disk, division by zero as numpy): every value comes from the same operations in the same
 order, so the turns, and so the plans, are the same to the last bit. The numpy code stays
-the reference.
+the reference (:mod:`planner.turn_references`, :mod:`planner.line_end_references`).
 
 Unlike :mod:`planner.kernels` these call ``sin``, ``cos``, ``atan2``, ``acos`` and
 ``hypot``: numba calls the C library's, as numpy does for float64 on x86-64 without
@@ -46,7 +46,7 @@ def _dubins(
     best: IntArray,
     params: FloatArray,
 ) -> None:
-    """``planner.turns._dubins_words_numpy``, one turn at a time; ``best`` -1: no word.
+    """``planner.turn_references.dubins_words_numpy``, one turn at a time; ``best`` -1: no word.
 
     ``codes``: the words tried, as indices into :data:`planner.turns.DUBINS_WORDS` (LSL,
     RSR, LSR, RSL, RLR, LRL).
@@ -116,7 +116,7 @@ def _dubins(
 def _advance(
     x: float, y: float, yaw: float, sign: int, length: float, radius: float
 ) -> tuple[float, float, float]:
-    """``planner.turns._advance`` of one pose."""
+    """``planner.turn_references._advance`` of one pose."""
     kappa = sign / radius
     new_yaw = yaw + kappa * length
     if sign == 0:
@@ -141,7 +141,7 @@ def _sample(
     arc_step: float,
     step: float,
 ) -> tuple[FloatArray, IntArray]:
-    """Return the points and offsets of ``planner.turns._sample_numpy``."""
+    """Return the points and offsets of ``planner.turn_references.sample_numpy``."""
     n, m = signs.shape
     pieces = np.zeros((n, m), dtype=np.int64)
     offsets = np.zeros(n + 1, dtype=np.int64)
@@ -180,7 +180,7 @@ def _translate(
     x1: FloatArray,
     y1: FloatArray,
 ) -> None:
-    """``planner.turns._translate_numpy``'s moves, in place."""
+    """``planner.turn_references.translate_numpy``'s moves, in place."""
     for k in range(len(offsets) - 1):
         first, last = offsets[k], offsets[k + 1] - 1
         for i in range(first, last + 1):
@@ -241,7 +241,7 @@ def _chain_crossings(
     tolerance: float,
     reduce_max: bool,
 ) -> None:
-    """``planner.line_ends._chain_vertices_under`` folded into ``delta`` (max) or ``fits``.
+    """``line_end_references._chain_vertices_under`` folded into ``delta`` (max) or ``fits``.
 
     ``cu``, ``cv``: both chains, the upper's vertices first, the lower's shifted by ``shift``;
     a turn at the top (``top``) meets the upper chain's vertices, others the lower's.
@@ -280,7 +280,7 @@ def _fit_turns(
     fits_out: npt.NDArray[np.bool_],
     xy_out: FloatArray,
 ) -> bool:
-    """``planner.line_ends._fitted_numpy``'s shifts, fits and moved points; False: not done.
+    """``line_end_references.fitted_numpy``'s shifts, fits and moved points; False: not done.
 
     Chains whose ``u`` steps back (which :func:`planner.coverage.convex_chains` never makes)
     are left to the numpy code: ``np.interp`` and ``searchsorted`` answer differently there.
@@ -451,7 +451,7 @@ def combine_variants(
 def _driving(
     x: FloatArray, y: FloatArray, speed: float, rate: float, arc_step: float
 ) -> tuple[FloatArray, FloatArray]:
-    """``planner.turns._driving_time_numpy``'s time per moving step and corner changes [s, rad]."""
+    """``turn_references.driving_time_numpy``'s time per moving step and corner changes [s, rad]."""
     n = len(x)
     step = np.empty(max(n - 1, 0))
     heading = np.empty(max(n - 1, 0))

@@ -14,7 +14,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely import MultiPoint, Polygon
 
-from planner import convex_fits, fit_kernels, kernels, line_ends, pipeline, turns
+from planner import (
+    convex_fits,
+    fit_kernels,
+    kernels,
+    line_end_references,
+    line_ends,
+    pipeline,
+    turn_references,
+    turns,
+)
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
 from planner.lines import to_sweep
@@ -56,7 +65,7 @@ def check_ends(ends: TurnEnds, radius_m: float) -> None:
     """Both words and samples equal the numpy code's, for every word set and both steps."""
     for words in (tuple(DUBINS_WORDS), BULB_WORDS, ("LSL", "RSR")):
         try:
-            slow = turns._dubins_words_numpy(ends, radius_m=radius_m, words=words)
+            slow = turn_references.dubins_words_numpy(ends, radius_m=radius_m, words=words)
         except ValueError:
             with pytest.raises(ValueError):
                 turns.dubins_words(ends, radius_m=radius_m, words=words)
@@ -66,7 +75,7 @@ def check_ends(ends: TurnEnds, radius_m: float) -> None:
         signs, lengths = fast[0], fast[1] * radius_m
         for step in (turns.STEP_M, 0.13):
             assert same_curves(
-                turns._sample_numpy(ends, signs, lengths, radius_m, step),
+                turn_references.sample_numpy(ends, signs, lengths, radius_m, step),
                 turns._sample(ends, signs, lengths, radius_m, step),
             )
         # Moved onto other ends: each turn its own shape, or shapes shared (in any order).
@@ -77,7 +86,7 @@ def check_ends(ends: TurnEnds, radius_m: float) -> None:
         n = len(ends)
         for shape_of in (None, np.arange(n)[::-1].copy()):
             assert same_curves(
-                turns._translate_numpy(copy_curves(shapes), shape_of, moved),
+                turn_references.translate_numpy(copy_curves(shapes), shape_of, moved),
                 turns._translate(copy_curves(shapes), shape_of, moved),
             )
         # Backwards segments (Reeds–Shepp's negative lengths) and zero ones.
@@ -86,7 +95,7 @@ def check_ends(ends: TurnEnds, radius_m: float) -> None:
         )
         backwards[:, 2] = np.where(np.arange(len(backwards)) % 2 == 0, 0.0, backwards[:, 2])
         assert same_curves(
-            turns._sample_numpy(ends, signs, backwards, radius_m, turns.STEP_M),
+            turn_references.sample_numpy(ends, signs, backwards, radius_m, turns.STEP_M),
             turns._sample(ends, signs, backwards, radius_m, turns.STEP_M),
         )
 
@@ -150,11 +159,11 @@ def test_plans_turns_equal_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
         )
 
     fast = plans()
-    monkeypatch.setattr(turns, "dubins_words", turns._dubins_words_numpy)
-    monkeypatch.setattr(turns, "_sample", turns._sample_numpy)
-    monkeypatch.setattr(turns, "_translate", turns._translate_numpy)
+    monkeypatch.setattr(turns, "dubins_words", turn_references.dubins_words_numpy)
+    monkeypatch.setattr(turns, "_sample", turn_references.sample_numpy)
+    monkeypatch.setattr(turns, "_translate", turn_references.translate_numpy)
     monkeypatch.setattr(fit_kernels, "fit_turns", lambda *args: None)  # numpy decides
-    monkeypatch.setattr(pipeline, "driving_time_s", turns._driving_time_numpy)
+    monkeypatch.setattr(pipeline, "driving_time_s", turn_references.driving_time_numpy)
 
     def combined(*args: Any) -> tuple[np.ndarray, np.ndarray]:
         h, counts, rows, start_xy, finish_xy = args
@@ -173,7 +182,9 @@ def test_warm_up_compiles() -> None:
 def fitted_both(
     curves: TurnCurves, top: np.ndarray, machine: Chains
 ) -> tuple[tuple[TurnCurves, np.ndarray, np.ndarray], tuple[TurnCurves, np.ndarray, np.ndarray]]:
-    slow = line_ends._fitted_numpy(curves, top, machine)
+    slow = line_end_references.fitted_numpy(
+        curves, top, machine, tolerance_m=line_ends.FIT_TOLERANCE_M
+    )
     fast = fit_kernels.fit_turns(
         curves.xy, curves.offsets, top, machine.lo_u, machine.lo_v, machine.hi_u, machine.hi_v,
         line_ends.FIT_TOLERANCE_M,
@@ -278,7 +289,7 @@ def test_driving_time_kernel_equals_numpy(
     steps = np.array([(dx * s, dy * s) for dx, dy, s in moves]).reshape(-1, 2)
     xy = np.concatenate([np.zeros((1, 2)), np.cumsum(steps, axis=0)]) + 100.0
     fast = turns.driving_time_s(xy[:, 0], xy[:, 1], speed_mps=speed_mps, turn_rate_dps=rate_dps)
-    slow = turns._driving_time_numpy(
+    slow = turn_references.driving_time_numpy(
         xy[:, 0], xy[:, 1], speed_mps=speed_mps, turn_rate_dps=rate_dps
     )
     assert same_bits(np.array([slow]), np.array([fast]))
@@ -298,7 +309,9 @@ def test_turn_fitting_kernel_leaves_an_empty_chain_to_numpy(empty: str) -> None:
     assert fit_kernels.fit_turns(xy, off, top, c.lo_u, c.lo_v, c.hi_u, c.hi_v, 1e-6) is None
     # What a caller gets is the numpy code's answer: np.interp refuses an empty chain.
     with pytest.raises(ValueError, match="empty"):
-        line_ends._fitted_numpy(curves, top, machine)
+        line_end_references.fitted_numpy(
+            curves, top, machine, tolerance_m=line_ends.FIT_TOLERANCE_M
+        )
     lines = SimpleNamespace(u=np.zeros(2), up=np.array([True, False]))
     with pytest.raises(ValueError, match="empty"):
         line_ends._fit_turns(np.array([0]), np.array([1]), lines, machine, None, curves)  # type: ignore[arg-type]
