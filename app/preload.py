@@ -14,11 +14,22 @@ a second of imports), which ``plan-batch``'s workers never need; the server's en
 them in its workers when they start.
 
 Importing this module is its whole purpose; nothing else should import it. It only imports and
-loads: no thread, socket, database connection or file stays open across the fork.
+loads: it opens no socket and no database connection of the app's (pyproj keeps its read-only
+PROJ database open, as in any process that has projected).
+
+A failure here must not take the fork server down: Python's fork server survives only an
+``ImportError`` in its preload, and every worker and budgeted plan is forked from it. So a
+failed kernel load is logged, and each worker loads the kernels again through
+:class:`app.kernels_plugin.KernelWarmUp`, where a real error shows on the first plan.
 """
+
+import logging
 
 import app.cli.batch_tasks  # noqa: F401  (plan-batch's task)
 import app.kernels_plugin  # noqa: F401  (unpickled by every worker as the plugin registers)
 from planner.warm_up import warm_up
 
-warm_up()
+try:
+    warm_up()
+except Exception:
+    logging.getLogger(__name__).exception("the fork server could not load the planner's kernels")

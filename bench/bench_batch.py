@@ -5,7 +5,7 @@ Speed-up: the five real field files are merged into one GeoPackage and planned a
 alternated :data:`REPEAT` times, medians compared. Budget (product.md §11): ≥ 1.7 × with 2
 workers. The budget's figure is on the local cluster as ``plan-batch`` starts it, started
 before the clock: its workers are forked from a process that has loaded the planner and its
-kernels (:mod:`app.preload`), once per cluster. Two more figures say what that
+kernels (:mod:`app.preload`), once per process that starts clusters. Two more figures say what that
 leaves out: spawned workers, which load the planner on their first task inside the clock (as
 workers that ``dask worker`` starts on other machines do on a batch's first run), and the whole
 command as a user types it, cluster start included.
@@ -200,7 +200,8 @@ def run() -> str:
             f"The {count} real fields of `../shared/fields` in one GeoPackage, at 4 m, "
             f"{FIELDS_PER_TASK} fields per task (the command's default), on a local Dask "
             "cluster as `plan-batch` starts it, started before the clock (its workers forked "
-            "from a process that has loaded the planner and its kernels, once per cluster); "
+            "from a process that has loaded the planner and its kernels once, for every cluster "
+            "this process starts); "
             f"1 and 2 workers alternated {REPEAT} times, medians:",
             "",
             "| workers | seconds | fields/s | fields/s per worker | failed |",

@@ -228,8 +228,10 @@ def plan_general(
         if len(ranked) > 1:
             # R5: the ragged estimate can miss the best-covering heading; those it may have
             # misjudged (by as much as it misjudged the ones above) are decomposed too.
+            # The rounded misses, as above: a last-bit difference between CPUs must not
+            # change which headings are decomposed.
             ragged = ragged_deficit_m2(
-                scores.missed_m2, scores.pieces, scores.turn_backs, turn_change_m(machine, d)[1], d
+                missed, scores.pieces, scores.turn_backs, turn_change_m(machine, d)[1], d
             )
             parts_m2 = float(sum(p.area for p in parts))
             known = {
