@@ -17,6 +17,17 @@ IO_STACKS = {"app", "fastapi", "starlette", "sqlalchemy", "uvicorn", "requests",
 FORBIDDEN_IMPORTS = {"planner": IO_STACKS | {"navigation"}, "navigation": IO_STACKS}
 FORBIDDEN_CALLS = {"open", "print", "input"}
 
+
+def imported_names(node: ast.AST, package: str) -> list[str]:
+    """The modules an import statement names (none for other nodes); a relative import
+    (level > 0) names ``package``, by definition."""
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    if isinstance(node, ast.ImportFrom):
+        return [package if node.level else node.module or ""]
+    return []
+
+
 MODULES = [
     (package, path)
     for package in FORBIDDEN_IMPORTS
@@ -30,13 +41,7 @@ MODULES = [
 def test_pure_packages_import_no_io_layer_and_do_no_io(package: str, path: Path) -> None:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            names = [node.module or ""]
-        else:
-            names = []
-        for name in names:
+        for name in imported_names(node, package):
             assert name.split(".")[0] not in FORBIDDEN_IMPORTS[package], f"{path} imports {name}"
             assert not name.startswith("matplotlib.pyplot"), f"{path} imports pyplot"
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
@@ -54,14 +59,7 @@ def test_base_modules_import_nothing_of_their_package(relative: str) -> None:
     path = ROOT / relative
     package = relative.split("/")[0]
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Import):
-            names = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            # A relative import (level > 0) is of the package by definition.
-            names = [package if node.level else node.module or ""]
-        else:
-            names = []
-        for name in names:
+        for name in imported_names(node, package):
             assert name.split(".")[0] != package, f"{relative} imports {name}"
 
 
@@ -72,11 +70,5 @@ BENCHES = sorted((ROOT / "bench").rglob("*.py"))
 def test_benches_import_no_tests(path: Path) -> None:
     """What a bench shares with the tests lives in ``bench/`` (``bench.shapes``), not ``tests/``."""
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Import):
-            names = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            names = [node.module or ""]
-        else:
-            names = []
-        for name in names:
+        for name in imported_names(node, "bench"):
             assert name.split(".")[0] != "tests", f"{path} imports {name}"
