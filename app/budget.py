@@ -10,10 +10,12 @@ stopped and answered 422, naming the limit. The command line (``tillpath plan``)
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import multiprocessing.connection
 import threading
 import time
+from multiprocessing.context import ForkServerContext
 from typing import Any, Final
 
 from shapely import Polygon
@@ -27,9 +29,16 @@ INLINE_MAX_VERTICES: Final = 400
 #: Fields with up to this many holes are planned in the request's thread.
 INLINE_MAX_HOLES: Final = 10
 
-# The fork server loads the planner's compiled kernels, so that no child pays for them out of
-# its budget.
-_context = preloaded_context()
+
+@functools.cache
+def _context() -> ForkServerContext:
+    """Return the fork server's context, made on first use.
+
+    Its server loads the planner's compiled kernels, so that no child pays for them out of its
+    budget. Made here rather than when the web app is imported: it imports Dask for its
+    settings (about 0.2 s).
+    """
+    return preloaded_context()
 
 
 def _nothing() -> None:
@@ -42,7 +51,7 @@ def _warm_up() -> None:
     # The fork server first, and this process's kernels once it is ready: with a cold numba
     # cache the fork server compiles them (about 9 s of CPU, once per install) and this
     # process then loads them from the cache instead of compiling them a second time.
-    child = _context.Process(target=_nothing, daemon=True)
+    child = _context().Process(target=_nothing, daemon=True)
     child.start()
     child.join()
     child.close()
@@ -135,8 +144,8 @@ def plan_coverage(field_lonlat: Polygon, *, budget_s: float, **options: Any) -> 
     if vertices <= INLINE_MAX_VERTICES and holes <= INLINE_MAX_HOLES:
         return planner.plan_coverage(field_lonlat, **options)
     deadline = time.monotonic() + budget_s  # the process's start counts against the budget
-    receiver, sender = _context.Pipe(duplex=False)
-    process = _context.Process(target=_worker, args=(sender, field_lonlat, options), daemon=True)
+    receiver, sender = _context().Pipe(duplex=False)
+    process = _context().Process(target=_worker, args=(sender, field_lonlat, options), daemon=True)
     process.start()
     sender.close()
     try:
