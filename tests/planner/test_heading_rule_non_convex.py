@@ -39,6 +39,17 @@ REAL_CASES = [
     pytest.param(
         "germany_2018_2019", "germany_2018_2019-37", "small_tractor", id="germany-37-small"
     ),
+    # Known gap (issue 9, R5): with a turning radius a field's coverage jumps by whole strips
+    # between headings 1° apart (here 58.0 % at 122°, 25.2 % at 123°), and the search's
+    # estimate does not see it: it picks 123° (``bench.heading_brute_force_real
+    # small_tractor`` finds 117 of 223 real fields short of the rule, worst 32.6 pp).
+    pytest.param(
+        "germany_2018_2019",
+        "germany_2018_2019-1",
+        "small_tractor",
+        id="germany-1-small",
+        marks=pytest.mark.xfail(strict=True, reason="R5 not yet held with a turning radius"),
+    ),
 ]
 #: The interval of the real fields [m] (their benchmarks').
 REAL_INTERVAL_M = 4.0
