@@ -2,7 +2,7 @@
 
 Python keeps one ``multiprocessing`` fork server per process. tillpath forks two kinds of
 children from it: the processes that plan a large field within a budget (:mod:`app.budget`)
-and the workers of the local Dask cluster (:mod:`app.jobs.engine`). Both set the same preload
+and the workers of the local Dask cluster (:mod:`app.local_cluster`). Both set the same preload
 here, so whichever starts the fork server first, it has loaded Dask and the planner
 (:mod:`app.preload`) and every child starts with them.
 """

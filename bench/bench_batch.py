@@ -36,7 +36,7 @@ import pyogrio.raw
 import shapely
 
 from app.cli.batch import FIELDS_PER_TASK, run_batch
-from app.jobs.engine import start_local_cluster
+from app.local_cluster import start_local_cluster
 from app.testing import tillpath_command
 from bench.common import small_quadrilaterals
 

@@ -161,8 +161,8 @@ def run_batch(
 
     from app.cli.batch_read import iter_field_chunks, open_fields
     from app.cli.batch_tasks import plan_records
-    from app.jobs.engine import start_local_cluster
     from app.kernels_plugin import KernelWarmUp
+    from app.local_cluster import start_local_cluster
 
     source = open_fields(fields, layer=layer)
     # The scheduler runs in this process: its INFO lines would drown the progress bar.
