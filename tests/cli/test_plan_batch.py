@@ -202,3 +202,53 @@ def test_unreadable_input_and_bad_output_are_errors_with_status_2(tmp_path: Path
     )
     assert result.returncode == 2
     assert result.stderr.startswith("error: FIELDS: fields.txt is not a known format")
+
+
+def _marked(marker: str) -> list[str]:
+    """Command lines of the live processes whose environment has ``marker``."""
+    import psutil
+
+    found = []
+    for process in psutil.process_iter():
+        try:
+            if process.environ().get("TILLPATH_TEST_MARKER") == marker:
+                found.append(" ".join(process.cmdline()))
+        except psutil.Error:
+            continue
+    return found
+
+
+def test_a_file_that_cannot_be_read_leaves_no_fork_server_behind(tmp_path: Path) -> None:
+    """The fork server starts before the file is opened (it loads the planner meanwhile): a
+    file found unreadable then still ends the command at once, with no process left loading
+    the planner after it (the resource tracker goes with the command; it may take a moment).
+
+    Output to files, not pipes: a process left behind holds the command's stderr, and reading
+    a pipe to its end would wait for that process too.
+    """
+    import os
+    import time
+    import uuid
+
+    fields = tmp_path / "fields.gpkg"
+    fields.write_bytes(b"not a GeoPackage")
+    marker = uuid.uuid4().hex
+    with (tmp_path / "stderr.txt").open("w+") as stderr:
+        returncode = subprocess.run(
+            [*TILLPATH, "plan-batch", str(fields), "-o", str(tmp_path / "out.gpkg")],
+            stdout=subprocess.DEVNULL,
+            stderr=stderr,
+            timeout=60,
+            env={**os.environ, "TILLPATH_TEST_MARKER": marker},
+        ).returncode
+        left_at_exit = _marked(marker)
+        stderr.seek(0)
+        message = stderr.read()
+    assert returncode == 2
+    assert message.startswith("error: FIELDS: cannot read"), message
+    assert not [c for c in left_at_exit if "forkserver" in c], left_at_exit
+    deadline = time.monotonic() + 2.0
+    while (left := _marked(marker)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not left
+    assert not (tmp_path / "out.gpkg").exists()
