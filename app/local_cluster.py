@@ -43,7 +43,8 @@ def _preload_forkserver() -> None:
 
     Dask sets its list (distributed, numpy, …) the first time it asks for the context; ours
     loads Dask and the planner. Takes effect when the fork server starts (the first child this
-    process forks); one already running (as :mod:`app.budget` starts it) keeps what it has.
+    process forks); one already running (:mod:`app.budget` and ``plan-batch`` start it
+    earlier, :func:`app.forkserver.start_fork_server`) keeps what it has.
     """
     from distributed.utils import get_mp_context
 
