@@ -3,7 +3,7 @@
 tillpath's processes fork their children from one ``multiprocessing`` fork server that has
 imported this module (and Dask, :mod:`app.forkserver`): the children that plan a large field
 within a budget (:mod:`app.budget`) and the workers of the local Dask cluster
-(:func:`app.jobs.engine.start_local_cluster`). Each child starts with the planner, its compiled
+(:func:`app.local_cluster.start_local_cluster`). Each child starts with the planner, its compiled
 kernels, ``plan-batch``'s task and the warm-up plugin in memory, shared copy-on-write, instead
 of paying for them itself: about 0.7 s of a core per child (``import planner`` with scipy
 0.3 s, ``numba`` and the kernels' disk cache 0.4 s), and one copy of the kernels' ~115 MiB of

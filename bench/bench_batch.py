@@ -28,7 +28,6 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 import psutil
@@ -36,12 +35,9 @@ import pyogrio.raw
 import shapely
 
 from app.cli.batch import FIELDS_PER_TASK, run_batch
-from app.jobs.engine import start_local_cluster
+from app.local_cluster import start_local_cluster
 from app.testing import tillpath_command
 from bench.common import small_quadrilaterals
-
-if TYPE_CHECKING:
-    from distributed import LocalCluster
 
 ROOT = Path(__file__).resolve().parent.parent
 FIELDS = ROOT.parent / "shared" / "fields"
@@ -86,20 +82,13 @@ def generated_fields(path: Path, count: int) -> None:
     write_gpkg(path, geometries, [f"g{i}" for i in range(count)])
 
 
-def started_cluster(workers: int, *, forked: bool) -> LocalCluster:
-    """Start a local cluster of ``workers`` as :func:`start_local_cluster` does and wait for
-    them; ``forked=False`` spawns them instead (they load the planner on their first task)."""
-    from distributed import Client
-
-    cluster = start_local_cluster(workers, forked=forked)
-    with Client(cluster.scheduler_address, set_as_default=False) as client:
-        client.wait_for_workers(workers)
-    return cluster
-
-
 def timed_batch(fields: Path, out: Path, workers: int, *, forked: bool) -> tuple[float, int, int]:
-    """Seconds ``run_batch`` takes on a started cluster of ``workers``, rows, failures."""
-    cluster = started_cluster(workers, forked=forked)
+    """Seconds ``run_batch`` takes on a started cluster of ``workers``, rows, failures.
+
+    :func:`start_local_cluster` returns once its workers have registered with the scheduler;
+    ``forked=False`` spawns them instead (they load the planner on their first task).
+    """
+    cluster = start_local_cluster(workers, forked=forked)
     try:
         started = time.perf_counter()
         rows, failed, _ = run_batch(

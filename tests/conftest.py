@@ -45,7 +45,7 @@ def _kernel_cache() -> None:
 @pytest.fixture(scope="session")
 def dask_scheduler() -> Iterator[str]:
     """The address of a small real Dask cluster (one worker process) for the whole session."""
-    from app.jobs.engine import start_local_cluster
+    from app.local_cluster import start_local_cluster
 
     cluster = start_local_cluster(1)
     try:

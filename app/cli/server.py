@@ -118,7 +118,7 @@ def register(cli: typer.Typer) -> None:
             options = uvicorn_options(get_settings())
         except UvicornChangedError as exc:
             fail(f"{exc}; install the locked version (pip install -r requirements.lock)")
-        from app.jobs.engine import start_local_cluster
+        from app.local_cluster import start_local_cluster
 
         # The fork server and the planner's kernels load while the database migrates.
         warming = warm_up()

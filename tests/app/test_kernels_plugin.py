@@ -14,8 +14,8 @@ def test_registering_the_plan_batch_plugin_does_not_load_the_web_app_in_workers(
     package imports the web app (about 1 s a worker inside ``plan-batch``'s run)."""
     from distributed import Client
 
-    from app.jobs.engine import start_local_cluster
     from app.kernels_plugin import KernelWarmUp
+    from app.local_cluster import start_local_cluster
 
     with start_local_cluster(1) as cluster, Client(cluster, set_as_default=False) as client:
         client.register_plugin(KernelWarmUp())

@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import time
+import uuid
 import zipfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import psutil
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pyogrio.raw
@@ -202,3 +206,73 @@ def test_unreadable_input_and_bad_output_are_errors_with_status_2(tmp_path: Path
     )
     assert result.returncode == 2
     assert result.stderr.startswith("error: FIELDS: fields.txt is not a known format")
+
+
+def _marked(marker: str) -> list[str]:
+    """Command lines of the live processes whose environment has ``marker``."""
+    found = []
+    for process in psutil.process_iter():
+        try:
+            if process.environ().get("TILLPATH_TEST_MARKER") == marker:
+                found.append(" ".join(process.cmdline()))
+        except psutil.Error:
+            continue
+    return found
+
+
+def test_a_file_that_cannot_be_read_leaves_no_fork_server_behind(tmp_path: Path) -> None:
+    """The fork server starts before the file is opened (it loads the planner meanwhile): a
+    file found unreadable then still ends the command at once, with no process left loading
+    the planner after it (the resource tracker goes with the command; it may take a moment).
+
+    Output to files, not pipes: a process left behind holds the command's stderr, and reading
+    a pipe to its end would wait for that process too.
+    """
+    fields = tmp_path / "fields.gpkg"
+    fields.write_bytes(b"not a GeoPackage")
+    marker = uuid.uuid4().hex
+    with (tmp_path / "stderr.txt").open("w+") as stderr:
+        returncode = subprocess.run(
+            [*TILLPATH, "plan-batch", str(fields), "-o", str(tmp_path / "out.gpkg")],
+            stdout=subprocess.DEVNULL,
+            stderr=stderr,
+            timeout=60,
+            env={**os.environ, "TILLPATH_TEST_MARKER": marker},
+        ).returncode
+        left_at_exit = _marked(marker)
+        stderr.seek(0)
+        message = stderr.read()
+    assert returncode == 2
+    assert message.startswith("error: FIELDS: cannot read"), message
+    assert not [c for c in left_at_exit if "forkserver" in c], left_at_exit
+    deadline = time.monotonic() + 2.0
+    while (left := _marked(marker)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not left
+    assert not (tmp_path / "out.gpkg").exists()
+
+
+_RUN_ONE_FIELD = """
+import sys
+from pathlib import Path
+from app.cli.batch import run_batch
+rows = run_batch(Path(sys.argv[1]), Path(sys.argv[2]), options={"interval_m": 4.0},
+                 scheduler=None, workers=1, per_task=8, show_progress=False)[:2]
+print(rows, sorted(m for m in sys.modules if m.startswith(("app.jobs", "app.main", "app.db"))))
+"""
+
+
+def test_plan_batch_on_its_own_cluster_does_not_import_the_web_app(tmp_path: Path) -> None:
+    """The local cluster's helpers live outside ``app.jobs``, whose package brings the web app
+    and its database stack (about 2 s before the cluster could start)."""
+    feature = rwanda_fields(1)[0]
+    fields = tmp_path / "fields.gpkg"
+    write_gpkg(fields, [shapely.geometry.shape(feature["geometry"])], ["a"], ["one"])
+    result = subprocess.run(
+        [sys.executable, "-c", _RUN_ONE_FIELD, str(fields), str(tmp_path / "out.gpkg")],
+        capture_output=True,
+        text=True,
+        timeout=180,
+        check=True,
+    )
+    assert result.stdout.split("\n")[0] == "(1, 0) []", result.stdout
