@@ -8,8 +8,10 @@ depends only on where the two ends are relative to each other, so pulling both e
 along their lines by the same distance slides the turn back unchanged. For every turn that
 distance is the smallest that brings the whole driven curve inside the machine area, read
 off the area's upper (or lower) chain in the sweep frame, in closed form for all turns at once.
-A turn that cannot fit at any distance (it swings out beyond the side of the area) or a line
-that the pull-back eats up removes that line, and the cell is fitted again.
+An Ω whose slide would be long, or that cannot fit, is tried with one end further back
+(:mod:`planner.lopsided_turns`). A turn that cannot fit at any distance (it swings out beyond
+the side of the area), a line that the pull-back eats up, or a line at the side whose turn
+costs its neighbour more than the line runs removes that line, and the cell is fitted again.
 """
 
 from __future__ import annotations
@@ -27,7 +29,13 @@ from shapely import MultiPolygon, Polygon
 
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
-from planner.line_end_references import fitted_numpy
+from planner.lopsided_turns import (
+    LopsidedPairs,
+    lopsided_turns,
+    pair_ends,
+    slide_turns,
+    tried_lopsided,
+)
 from planner.turns import (
     TurnCurves,
     TurnEnds,
@@ -215,12 +223,18 @@ def _fit_once(k: IntArray, turns: _TurnStore) -> tuple[FittedLines, BoolArray]:
     if n < 2:
         return FittedLines(u, a, b, index, turns.empty), np.zeros(n, dtype=bool)
     ids = turns.ids(k[:-1], k[1:])
-    shift, fits = turns.shift[ids], turns.fits[ids]
+    fits = turns.fits[ids]
     a2, b2 = a.copy(), b.copy()
-    b2[:-1] += shift
-    a2[1:] += shift
+    b2[:-1] += turns.shift_end[ids]
+    a2[1:] += turns.shift_start[ids]
     length = np.where(up, b2 - a2, a2 - b2)
     drop = length < 0.0
+    # A line at a side of the cell and an end of the route, whose one turn pulls its
+    # neighbour's end back further than the line itself runs, costs more than it tills.
+    ends = ((0, abs(turns.shift_start[ids[0]])), (n - 1, abs(turns.shift_end[ids[-1]])))
+    for e, pulled in ends:
+        if pulled > length[e] and u[e] in (u.min(), u.max()):
+            drop[e] = True
     # A turn that cannot fit drops the outer of its two lines (nearer the side of the area),
     # so that the lines left stay an interval apart.
     bad = np.nonzero(~fits)[0]
@@ -249,7 +263,8 @@ class _TurnStore:
         self._slot: dict[int, int] = {}
         self.empty = no_turns(vehicle)
         self.curves = self.empty
-        self.shift = np.zeros(0)
+        self.shift_end = np.zeros(0)  # of the first line's end
+        self.shift_start = np.zeros(0)  # of the second line's start
         self.fits = np.zeros(0, dtype=bool)
 
     def ids(self, first: IntArray, second: IntArray) -> IntArray:
@@ -262,14 +277,15 @@ class _TurnStore:
             planned = None
             if self._planned is not None and not slot and len(new) == self._n - 1:
                 planned = self._planned  # the first round: every line and its next
-            curves, shift, fits = _fit_turns(
+            curves, shift_end, shift_start, fits = _fit_turns(
                 first[pick], second[pick], self.lines, self.machine, self._vehicle, planned
             )
-            base = len(self.shift)
+            base = len(self.fits)
             for j, i in enumerate(new):
                 slot[keys[i]] = base + j
             self.curves = concat_turns(self.curves, curves) if base else curves
-            self.shift = np.concatenate([self.shift, shift])
+            self.shift_end = np.concatenate([self.shift_end, shift_end])
+            self.shift_start = np.concatenate([self.shift_start, shift_start])
             self.fits = np.concatenate([self.fits, fits])
         return np.fromiter((slot[key] for key in keys), dtype=np.int64, count=len(keys))
 
@@ -288,7 +304,7 @@ def _fit_turns(
     machine: Chains,
     vehicle: Vehicle,
     planned: TurnCurves | None = None,
-) -> tuple[TurnCurves, FloatArray, BoolArray]:
+) -> tuple[TurnCurves, FloatArray, FloatArray, BoolArray]:
     """Plan and fit the turns from the end of each line ``first`` to the start of ``second``.
 
     ``planned``: those turns, if they are planned already.
@@ -297,38 +313,34 @@ def _fit_turns(
     -------
     curves : TurnCurves
         The turns slid back along the lines so that they fit.
-    shift : ndarray
-        How far each turn slid along ``v`` (down at the top, up at the bottom) [m].
+    shift_end, shift_start : ndarray
+        How far the end of line ``first`` and the start of line ``second`` move along ``v``
+        (down at the top, up at the bottom) [m]: the same unless the turn is lopsided
+        (:func:`planner.lopsided_turns.lopsided_turns`).
     fits : ndarray of bool
         Whether it fits the machine area at all.
     """
-    u, up = lines.u, lines.up
     if planned is None:
-        yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
-        ends = TurnEnds(
-            u[first], lines.v_end[first], yaw[first], u[second], lines.v_start[second], yaw[second]
-        )
+        ends = pair_ends(lines.u, lines.up, lines.v_end, lines.v_start, first, second)
         curves = vehicle_turns(ends, vehicle)
     else:
         curves = planned
-    from planner import fit_kernels  # numba: imported by the first plan that needs it
-
-    top = up[first]
-    fast = fit_kernels.fit_turns(
-        curves.xy,
-        curves.offsets,
-        top,
-        machine.lo_u,
-        machine.lo_v,
-        machine.hi_u,
-        machine.hi_v,
-        FIT_TOLERANCE_M,
+    top = lines.up[first]
+    fitted, shift, fits = slide_turns(curves, top, machine, tolerance_m=FIT_TOLERANCE_M)
+    # An Ω (lines closer than two radii) swings out beyond both lines: slid back as a whole
+    # it can follow a boundary nearly parallel to the lines, or down a step, for tens of
+    # metres, or not fit beside it at all. Such a turn is tried lopsided.
+    tried = tried_lopsided(curves, top, np.abs(lines.u[second] - lines.u[first]), shift, fits)
+    if not tried.any():
+        return fitted, shift, shift.copy(), fits
+    return lopsided_turns(
+        LopsidedPairs(lines.u, lines.up, lines.v_end, lines.v_start, first, second),
+        machine,
+        vehicle,
+        (fitted, shift, fits),
+        tried,
+        tolerance_m=FIT_TOLERANCE_M,
     )
-    if fast is None:
-        return fitted_numpy(curves, top, machine, tolerance_m=FIT_TOLERANCE_M)
-    shift, fits, xy = fast
-    fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
-    return fitted, shift, fits
 
 
 def machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon | MultiPolygon:

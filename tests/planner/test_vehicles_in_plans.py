@@ -144,7 +144,10 @@ def test_small_tractor_snake_skips_lines_so_turns_need_no_loop() -> None:
     # U-turns of two arcs are shorter than the Ω every back-and-forth turn needs at 2 m.
     assert snake.stats.turn_length_m < back_and_forth.stats.turn_length_m
     offsets, _, _ = line_offsets(snake)
-    assert np.allclose(np.diff(offsets), 2.0, atol=1e-3)  # R2: the same lines, in another order
+    # R2: the same lines, in another order; the last may sit nearer its neighbour.
+    steps = np.diff(offsets)
+    assert np.allclose(steps[:-1], 2.0, atol=1e-3)
+    assert 0.0 < steps[-1] <= 2.0 + 1e-3
 
 
 def test_a_field_too_narrow_for_the_turning_radius_is_refused_naming_both() -> None:

@@ -1,0 +1,197 @@
+"""Turns slid back until they fit, and the Ω tried lopsided where sliding it costs too much.
+
+:func:`planner.line_ends.fit_lines` slides every turn back along its two lines until it fits
+the machine area (:func:`slide_turns`). An Ω, the turn between lines closer than two turning
+radii, swings out beyond *both* lines by ``radius - spacing / 2``; beside a boundary nearly
+parallel to the lines, or a step of it, that bulge makes the level Ω slide down the boundary
+for tens of metres, and both lines lose it (a 4 m interval with a 3 m radius: 1 m each side).
+With one of its two ends further back, the Ω's loop leans towards that line and no longer
+swings out beyond the other (:func:`lopsided_turns`). Each variant is the vehicle's own turn
+slid until it fits, as every turn is, so the body stays in (R1) and the curvature bound holds.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from planner.coverage import Chains
+from planner.line_end_references import fitted_numpy
+from planner.turns import TurnCurves, TurnEnds, concat_turns, take_turns, vehicle_turns
+from planner.types import Vehicle
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: A bulging turn slid back this many turning radii beyond its own reach past the line ends
+#: (or not fitting at all) is tried lopsided ...
+RETRY_RADII = 2.0
+#: ... with one of its two line ends further back by these many turning radii. One pull-back
+#: on each side; (2, 4, 6) gained 0.3 pp more on the real fields at 4 m with the small
+#: tractor but cost half a second of their 4 s (6 variants per turn tried instead of 2).
+LOPSIDED_RADII = (4.0,)
+
+
+class LopsidedPairs(NamedTuple):
+    """Lines in driving order (sweep frame [m]) and the pairs joined by the turns tried."""
+
+    u: FloatArray
+    up: BoolArray  # whether each line runs towards +v
+    v_end: FloatArray
+    v_start: FloatArray
+    first: IntArray  # the line each turn leaves ...
+    second: IntArray  # ... and the one it joins
+
+
+def slide_turns(
+    curves: TurnCurves, top: BoolArray, machine: Chains, *, tolerance_m: float
+) -> tuple[TurnCurves, FloatArray, BoolArray]:
+    """Slide each turn back along ``v`` until it fits the machine area.
+
+    ``top``: whether each turn is at the upper chain; ``tolerance_m``: how far outside the
+    area a point still counts as inside [m].
+
+    Returns
+    -------
+    curves : TurnCurves
+        The turns moved by their shifts.
+    shift : ndarray
+        Each turn's move along ``v`` (down at the top, up at the bottom) [m].
+    fits : ndarray of bool
+        Whether it fits at all.
+    """
+    from planner import fit_kernels  # numba: imported by the first plan that needs it
+
+    fast = fit_kernels.fit_turns(
+        curves.xy,
+        curves.offsets,
+        top,
+        machine.lo_u,
+        machine.lo_v,
+        machine.hi_u,
+        machine.hi_v,
+        tolerance_m,
+    )
+    if fast is None:
+        return fitted_numpy(curves, top, machine, tolerance_m=tolerance_m)
+    shift, fits, xy = fast
+    fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
+    return fitted, shift, fits
+
+
+def pair_ends(
+    u: FloatArray,
+    up: BoolArray,
+    v_end: FloatArray,
+    v_start: FloatArray,
+    first: IntArray,
+    second: IntArray,
+    back_end: FloatArray | float = 0.0,
+    back_start: FloatArray | float = 0.0,
+) -> TurnEnds:
+    """Return the ends of the turns from line ``first`` to ``second``, pulled back as given [m].
+
+    ``back_end`` moves the end of line ``first`` and ``back_start`` the start of ``second``
+    back along their lines (down at the top, up at the bottom).
+    """
+    inward = np.where(up[first], -1.0, 1.0)
+    yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
+    return TurnEnds(
+        u[first],
+        v_end[first] + inward * back_end,
+        yaw[first],
+        u[second],
+        v_start[second] + inward * back_start,
+        yaw[second],
+    )
+
+
+def tried_lopsided(
+    curves: TurnCurves, top: BoolArray, spacing_m: FloatArray, shift: FloatArray, fits: BoolArray
+) -> BoolArray:
+    """Which turns to try lopsided: Ωs that do not fit, or slid well beyond their own reach.
+
+    ``curves`` as planned (before sliding), ``spacing_m`` the distance between each turn's
+    two lines, ``shift`` and ``fits`` as :func:`slide_turns` gave them.
+    """
+    radius = curves.radius_m
+    v = curves.xy[:, 1]
+    starts, lasts = curves.offsets[:-1], curves.offsets[1:] - 1
+    if len(starts) == 0:
+        return np.zeros(0, dtype=bool)
+    # How far each turn runs beyond the farther of its two ends, away from the lines.
+    beyond = np.where(
+        top,
+        np.maximum.reduceat(v, starts) - np.maximum(v[starts], v[lasts]),
+        np.minimum(v[starts], v[lasts]) - np.minimum.reduceat(v, starts),
+    )
+    bulging = spacing_m < 2.0 * radius
+    return np.asarray(bulging & (~fits | (np.abs(shift) > beyond + RETRY_RADII * radius)))
+
+
+def lopsided_turns(
+    pairs: LopsidedPairs,
+    machine: Chains,
+    vehicle: Vehicle,
+    level: tuple[TurnCurves, FloatArray, BoolArray],
+    tried: BoolArray,
+    *,
+    tolerance_m: float,
+) -> tuple[TurnCurves, FloatArray, FloatArray, BoolArray]:
+    """Try the ``tried`` turns with one line end further back; keep what loses least.
+
+    ``level``: the turns as :func:`slide_turns` fitted them. Each tried turn is planned
+    again with the end of its first line, or the start of its second, further back by each
+    of :data:`LOPSIDED_RADII`, and slid until it fits; the one that pulls its two line ends
+    back least in total replaces the level turn, if it pulls them back less (or the level
+    turn does not fit).
+
+    Returns
+    -------
+    curves : TurnCurves
+        The turns, fitted.
+    shift_end, shift_start : ndarray
+        How far the first line's end and the second line's start move along ``v`` [m].
+    fits : ndarray of bool
+    """
+    fitted, shift, fits = level
+    t = np.nonzero(tried)[0]
+    backs = np.array(LOPSIDED_RADII) * fitted.radius_m
+    m = len(backs)
+    # Variants turn by turn: the first line's end pulled back by each, then the second's start.
+    k = np.repeat(t, 2 * m)
+    back_end = np.tile(np.concatenate([backs, np.zeros(m)]), len(t))
+    back_start = np.tile(np.concatenate([np.zeros(m), backs]), len(t))
+    first, second = pairs.first[k], pairs.second[k]
+    ends = pair_ends(
+        pairs.u, pairs.up, pairs.v_end, pairs.v_start, first, second, back_end, back_start
+    )
+    top = pairs.up[first]
+    moved, v_shift, v_fits = slide_turns(
+        vehicle_turns(ends, vehicle), top, machine, tolerance_m=tolerance_m
+    )
+    loss = np.where(v_fits, 2.0 * np.abs(v_shift) + back_end + back_start, np.inf)
+    best = np.argmin(loss.reshape(len(t), 2 * m), axis=1) + np.arange(len(t)) * 2 * m
+    better = loss[best] < np.where(fits[t], 2.0 * np.abs(shift[t]), np.inf) - 1e-9
+    shift_end, shift_start = shift.copy(), shift.copy()
+    if not better.any():
+        return fitted, shift_end, shift_start, fits
+    t, best = t[better], best[better]
+    inward = np.where(top[best], -1.0, 1.0)
+    shift_end[t] = v_shift[best] + inward * back_end[best]
+    shift_start[t] = v_shift[best] + inward * back_start[best]
+    fits = fits.copy()
+    fits[t] = True
+    # The chosen variants take the places of their level turns.
+    pick = np.arange(len(fitted))
+    pick[t] = len(fitted) + np.arange(len(t))
+    return (
+        take_turns(concat_turns(fitted, take_turns(moved, best)), pick),
+        shift_end,
+        shift_start,
+        fits,
+    )
