@@ -39,10 +39,10 @@ REAL_CASES = [
     pytest.param(
         "germany_2018_2019", "germany_2018_2019-37", "small_tractor", id="germany-37-small"
     ),
-    # Known gap (issue 9, R5): with a turning radius a field's coverage jumps by whole strips
-    # between headings 1° apart (here 58.0 % at 122°, 25.2 % at 123°), and the search's
-    # estimate does not see it: it picks 123° (``bench.heading_brute_force_real
-    # small_tractor`` finds 117 of 223 real fields short of the rule, worst 32.6 pp).
+    # Known gap (issue 9, R5): with a turning radius a field's coverage jumps between
+    # headings 1° apart (here 73.3 % at 124°, 70.8 % at the searched 124.6°), and the
+    # search's estimate does not see it (``bench.heading_brute_force_real small_tractor``
+    # finds 75 of 223 real fields short of the rule, worst 5.7 pp).
     pytest.param(
         "germany_2018_2019",
         "germany_2018_2019-1",
