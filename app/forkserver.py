@@ -100,9 +100,11 @@ def start_fork_server() -> int | None:
     """
     preloaded_context()
     server = _server()
-    running = server._forkserver_pid
+    # Without the private pid (another Python) the server still starts early; it is only
+    # never stopped by stop_fork_server.
+    running = getattr(server, "_forkserver_pid", None)
     multiprocessing.forkserver.ensure_running()
-    started: int | None = server._forkserver_pid
+    started: int | None = getattr(server, "_forkserver_pid", None)
     return started if started != running else None
 
 
@@ -113,9 +115,13 @@ def stop_fork_server(pid: int | None) -> None:
     loading the planner after the command has exited (over a second; with a cold kernel cache,
     as after an install, it compiles them, about 10 s). Closing its pipe, as Python does, only
     stops it once its preload is done, so it is killed, then reaped. None: nothing to stop.
+    Only for a process in which nothing else forks from the server meanwhile (a child being
+    forked would be lost): the command calls it before it starts any.
     """
     server = _server()
-    if pid is None or server._forkserver_pid != pid:
+    if pid is None or getattr(server, "_forkserver_pid", None) != pid:
         return
+    if not hasattr(server, "_stop"):
+        return  # another Python: the server finishes its preload, then exits with its pipe
     os.kill(pid, signal.SIGKILL)  # it has forked nothing and has nothing to save
     server._stop()  # closes its pipe, reaps it, forgets it (a later child starts a new one)

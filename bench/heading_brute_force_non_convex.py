@@ -28,6 +28,7 @@ from shapely import Polygon
 from bench.shapes import LOSS_SHARE, NON_CONVEX_CASES, field_from_local, star_field
 from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK
+from planner.errors import PlannerError
 
 #: The 1° grid of fixed headings [deg].
 GRID_DEG = np.arange(0.0, 180.0, 1.0)
@@ -83,7 +84,7 @@ def compare(field: Polygon, interval_m: float, vehicle: str | None = None) -> Ou
             fixed.append(
                 plan_coverage(field, interval_m=interval_m, vehicle=vehicle, angle_deg=h).stats
             )
-        except ValueError:
+        except PlannerError:  # refused at this heading (too many lines); a bug still raises
             continue
     best = max(fixed, key=lambda s: s.coverage_ratio)
     # As the test does: where the search found a heading between the 1° ones that covers more,

@@ -24,6 +24,7 @@ import time
 
 from bench.bench_fields import DATASETS, INTERVAL_M, load
 from bench.heading_brute_force_non_convex import LOSS_PCT, Outcome, compare
+from planner.errors import PlannerError
 
 
 def _field_outcome(job: tuple[str, object, str]) -> tuple[str, Outcome | None, float]:
@@ -31,7 +32,7 @@ def _field_outcome(job: tuple[str, object, str]) -> tuple[str, Outcome | None, f
     started = time.process_time()
     try:
         outcome = compare(field, INTERVAL_M, vehicle)  # type: ignore[arg-type]
-    except ValueError:  # the field is refused at 4 m (the bench_fields row counts those)
+    except PlannerError:  # the field is refused at 4 m (the bench_fields row counts those)
         outcome = None
     return field_id, outcome, time.process_time() - started
 
@@ -61,6 +62,9 @@ def main() -> None:
                 f"shortfall {o.shortfall_pp:.3f} pp, excess {o.excess_pct:+.2f} % "
                 f"(vs {o.shortest_deg:.1f}°)"
             )
+    refused = [fid for fid, o, _ in results if o is None]
+    if refused:
+        print(f"refused at {INTERVAL_M:g} m, left out: {', '.join(refused)}")
     short = [o.shortfall_pp for _, o in planned]
     excess = [o.excess_pct for _, o in planned]
     print(

@@ -225,13 +225,13 @@ def _fit_once(k: IntArray, turns: _TurnStore) -> tuple[FittedLines, BoolArray]:
     ids = turns.ids(k[:-1], k[1:])
     fits = turns.fits[ids]
     a2, b2 = a.copy(), b.copy()
-    b2[:-1] += turns.shift_end[ids]
-    a2[1:] += turns.shift_start[ids]
+    b2[:-1] += turns.shift_end_m[ids]
+    a2[1:] += turns.shift_start_m[ids]
     length = np.where(up, b2 - a2, a2 - b2)
     drop = length < 0.0
     # A line at a side of the cell and an end of the route, whose one turn pulls its
     # neighbour's end back further than the line itself runs, costs more than it tills.
-    ends = ((0, abs(turns.shift_start[ids[0]])), (n - 1, abs(turns.shift_end[ids[-1]])))
+    ends = ((0, abs(turns.shift_start_m[ids[0]])), (n - 1, abs(turns.shift_end_m[ids[-1]])))
     for e, pulled in ends:
         if pulled > length[e] and u[e] in (u.min(), u.max()):
             drop[e] = True
@@ -263,8 +263,8 @@ class _TurnStore:
         self._slot: dict[int, int] = {}
         self.empty = no_turns(vehicle)
         self.curves = self.empty
-        self.shift_end = np.zeros(0)  # of the first line's end
-        self.shift_start = np.zeros(0)  # of the second line's start
+        self.shift_end_m = np.zeros(0)  # of the first line's end
+        self.shift_start_m = np.zeros(0)  # of the second line's start
         self.fits = np.zeros(0, dtype=bool)
 
     def ids(self, first: IntArray, second: IntArray) -> IntArray:
@@ -277,15 +277,15 @@ class _TurnStore:
             planned = None
             if self._planned is not None and not slot and len(new) == self._n - 1:
                 planned = self._planned  # the first round: every line and its next
-            curves, shift_end, shift_start, fits = _fit_turns(
+            curves, shift_end_m, shift_start_m, fits = _fit_turns(
                 first[pick], second[pick], self.lines, self.machine, self._vehicle, planned
             )
             base = len(self.fits)
             for j, i in enumerate(new):
                 slot[keys[i]] = base + j
             self.curves = concat_turns(self.curves, curves) if base else curves
-            self.shift_end = np.concatenate([self.shift_end, shift_end])
-            self.shift_start = np.concatenate([self.shift_start, shift_start])
+            self.shift_end_m = np.concatenate([self.shift_end_m, shift_end_m])
+            self.shift_start_m = np.concatenate([self.shift_start_m, shift_start_m])
             self.fits = np.concatenate([self.fits, fits])
         return np.fromiter((slot[key] for key in keys), dtype=np.int64, count=len(keys))
 
@@ -313,7 +313,7 @@ def _fit_turns(
     -------
     curves : TurnCurves
         The turns slid back along the lines so that they fit.
-    shift_end, shift_start : ndarray
+    shift_end_m, shift_start_m : ndarray
         How far the end of line ``first`` and the start of line ``second`` move along ``v``
         (down at the top, up at the bottom) [m]: the same unless the turn is lopsided
         (:func:`planner.lopsided_turns.lopsided_turns`).

@@ -90,22 +90,22 @@ def pair_ends(
     v_start: FloatArray,
     first: IntArray,
     second: IntArray,
-    back_end: FloatArray | float = 0.0,
-    back_start: FloatArray | float = 0.0,
+    back_end_m: FloatArray | float = 0.0,
+    back_start_m: FloatArray | float = 0.0,
 ) -> TurnEnds:
     """Return the ends of the turns from line ``first`` to ``second``, pulled back as given [m].
 
-    ``back_end`` moves the end of line ``first`` and ``back_start`` the start of ``second``
+    ``back_end_m`` moves the end of line ``first`` and ``back_start_m`` the start of ``second``
     back along their lines (down at the top, up at the bottom).
     """
     inward = np.where(up[first], -1.0, 1.0)
     yaw = np.where(up, math.pi / 2.0, -math.pi / 2.0)
     return TurnEnds(
         u[first],
-        v_end[first] + inward * back_end,
+        v_end[first] + inward * back_end_m,
         yaw[first],
         u[second],
-        v_start[second] + inward * back_start,
+        v_start[second] + inward * back_start_m,
         yaw[second],
     )
 
@@ -154,36 +154,36 @@ def lopsided_turns(
     -------
     curves : TurnCurves
         The turns, fitted.
-    shift_end, shift_start : ndarray
+    shift_end_m, shift_start_m : ndarray
         How far the first line's end and the second line's start move along ``v`` [m].
     fits : ndarray of bool
     """
     fitted, shift, fits = level
     t = np.nonzero(tried)[0]
-    backs = np.array(LOPSIDED_RADII) * fitted.radius_m
-    m = len(backs)
+    backs_m = np.array(LOPSIDED_RADII) * fitted.radius_m
+    m = len(backs_m)
     # Variants turn by turn: the first line's end pulled back by each, then the second's start.
     k = np.repeat(t, 2 * m)
-    back_end = np.tile(np.concatenate([backs, np.zeros(m)]), len(t))
-    back_start = np.tile(np.concatenate([np.zeros(m), backs]), len(t))
+    back_end_m = np.tile(np.concatenate([backs_m, np.zeros(m)]), len(t))
+    back_start_m = np.tile(np.concatenate([np.zeros(m), backs_m]), len(t))
     first, second = pairs.first[k], pairs.second[k]
     ends = pair_ends(
-        pairs.u, pairs.up, pairs.v_end, pairs.v_start, first, second, back_end, back_start
+        pairs.u, pairs.up, pairs.v_end, pairs.v_start, first, second, back_end_m, back_start_m
     )
     top = pairs.up[first]
     moved, v_shift, v_fits = slide_turns(
         vehicle_turns(ends, vehicle), top, machine, tolerance_m=tolerance_m
     )
-    loss = np.where(v_fits, 2.0 * np.abs(v_shift) + back_end + back_start, np.inf)
+    loss = np.where(v_fits, 2.0 * np.abs(v_shift) + back_end_m + back_start_m, np.inf)
     best = np.argmin(loss.reshape(len(t), 2 * m), axis=1) + np.arange(len(t)) * 2 * m
     better = loss[best] < np.where(fits[t], 2.0 * np.abs(shift[t]), np.inf) - 1e-9
-    shift_end, shift_start = shift.copy(), shift.copy()
+    shift_end_m, shift_start_m = shift.copy(), shift.copy()
     if not better.any():
-        return fitted, shift_end, shift_start, fits
+        return fitted, shift_end_m, shift_start_m, fits
     t, best = t[better], best[better]
     inward = np.where(top[best], -1.0, 1.0)
-    shift_end[t] = v_shift[best] + inward * back_end[best]
-    shift_start[t] = v_shift[best] + inward * back_start[best]
+    shift_end_m[t] = v_shift[best] + inward * back_end_m[best]
+    shift_start_m[t] = v_shift[best] + inward * back_start_m[best]
     fits = fits.copy()
     fits[t] = True
     # The chosen variants take the places of their level turns.
@@ -191,7 +191,7 @@ def lopsided_turns(
     pick[t] = len(fitted) + np.arange(len(t))
     return (
         take_turns(concat_turns(fitted, take_turns(moved, best)), pick),
-        shift_end,
-        shift_start,
+        shift_end_m,
+        shift_start_m,
         fits,
     )

@@ -168,6 +168,7 @@ def run_batch(
 
         source = open_fields(fields, layer=layer)
         output.unlink(missing_ok=True)
+        writer = GeoPackageWriter(output)
     except BaseException:
         stop_fork_server(server)  # it would load the planner on after this command has exited
         raise
@@ -180,7 +181,8 @@ def run_batch(
 
     # The scheduler runs in this process: its INFO lines would drown the progress bar.
     logging.getLogger("distributed").setLevel(logging.WARNING)
-    writer = GeoPackageWriter(output)
+    # A cluster that fails to start leaves the fork server to finish its preload and exit
+    # (about 1.4 s): its workers may already be forked from it, so it is not killed.
     cluster = None if scheduler else start_local_cluster(workers)
     client = Client(scheduler or cluster, set_as_default=False)
     try:

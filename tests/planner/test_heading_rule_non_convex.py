@@ -48,7 +48,9 @@ REAL_CASES = [
         "germany_2018_2019-1",
         "small_tractor",
         id="germany-1-small",
-        marks=pytest.mark.xfail(strict=True, reason="R5 not yet held with a turning radius"),
+        marks=pytest.mark.xfail(
+            strict=True, raises=AssertionError, reason="R5 not yet held with a turning radius"
+        ),
     ),
 ]
 #: The interval of the real fields [m] (their benchmarks').

@@ -51,7 +51,7 @@ def test_an_omega_beside_a_wall_leans_away_from_it_instead_of_sliding_down_the_w
 def test_a_side_line_shorter_than_the_pull_back_its_turn_costs_is_left_out() -> None:
     # Line 2 runs 10 m up a tongue; its Ω to line 6 pulls both ends back 6.3 m: the line
     # keeps 3.7 m and costs line 6 its 6.3 m. Without it, line 6 runs to the top.
-    ring = [(0, 50), (4.2, 50), (4.0, 0), (12, 0), (12, 60), (0, 60)]
+    ring = [(0, 50), (4.2, 50), (4.2, 0), (12, 0), (12, 60), (0, 60)]
     fit = _fit(ring, [2.0, 6.0, 10.0])
     assert fit.index.tolist() == [1, 2]
     assert fit.v_start[0] == 60.0  # line 6 starts at the top: no turn before it
