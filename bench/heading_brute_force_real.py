@@ -18,8 +18,8 @@ part of ``make bench``.
 
 from __future__ import annotations
 
+import argparse
 import multiprocessing
-import sys
 import time
 
 from bench.bench_fields import DATASETS, INTERVAL_M, load
@@ -37,19 +37,14 @@ def _field_outcome(job: tuple[str, object, str]) -> tuple[str, Outcome | None, f
     return field_id, outcome, time.process_time() - started
 
 
-def _option(args: list[str], name: str, default: int) -> int:
-    return int(args[args.index(name) + 1]) if name in args else default
-
-
 def main() -> None:
-    args = sys.argv[1:]
-    options = {"--workers", "--limit"}
-    values = {args[i + 1] for i, a in enumerate(args) if a in options}
-    positional = [a for a in args if a not in options and a not in values]
-    vehicle = positional[0] if positional else "hand_tractor"
-    workers = _option(args, "--workers", 2)
-    fields = [(fid, field) for name in DATASETS for fid, field in load(name)]
-    fields = fields[: _option(args, "--limit", len(fields))]
+    parser = argparse.ArgumentParser(prog="python -m bench.heading_brute_force_real")
+    parser.add_argument("vehicle", nargs="?", default="hand_tractor")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--limit", type=int, default=None, help="only the first LIMIT fields")
+    args = parser.parse_args()
+    vehicle, workers = args.vehicle, args.workers
+    fields = [(fid, field) for name in DATASETS for fid, field in load(name)][: args.limit]
     jobs = [(fid, field, vehicle) for fid, field in fields]
     with multiprocessing.get_context("fork").Pool(workers) as pool:
         results = pool.map(_field_outcome, jobs, chunksize=1)
