@@ -6,7 +6,7 @@ computes the same in numpy, all turns at once. It is kept for two reasons: it is
 ``tests/planner/test_fit_kernels.py`` holds the kernel to bit for bit, and it is the fallback
 for the machine areas the kernel declines (it returns ``None`` for an empty chain, or one whose
 ``u`` steps back, where ``np.interp`` and ``searchsorted`` answer differently). It lives apart
-from :mod:`planner.line_ends` so that the fitting reads on its own: :mod:`planner.line_ends`
+from :mod:`planner.line_ends` so that the fitting reads on its own: :mod:`planner.turn_slides`
 imports it, and it imports nothing of :mod:`planner.line_ends` (no import cycle).
 """
 

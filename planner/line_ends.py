@@ -29,13 +29,8 @@ from shapely import MultiPolygon, Polygon
 
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
-from planner.lopsided_turns import (
-    LopsidedPairs,
-    lopsided_turns,
-    pair_ends,
-    slide_turns,
-    tried_lopsided,
-)
+from planner.lopsided_turns import LopsidedPairs, lopsided_turns, pair_ends, tried_lopsided
+from planner.turn_slides import slide_turns
 from planner.turns import (
     TurnCurves,
     TurnEnds,

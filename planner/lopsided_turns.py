@@ -1,13 +1,14 @@
-"""Turns slid back until they fit, and the Ω tried lopsided where sliding it costs too much.
+"""The Ω tried lopsided where sliding it back level costs too much.
 
 :func:`planner.line_ends.fit_lines` slides every turn back along its two lines until it fits
-the machine area (:func:`slide_turns`). An Ω, the turn between lines closer than two turning
-radii, swings out beyond *both* lines by ``radius - spacing / 2``; beside a boundary nearly
-parallel to the lines, or a step of it, that bulge makes the level Ω slide down the boundary
-for tens of metres, and both lines lose it (a 4 m interval with a 3 m radius: 1 m each side).
-With one of its two ends further back, the Ω's loop leans towards that line and no longer
-swings out beyond the other (:func:`lopsided_turns`). Each variant is the vehicle's own turn
-slid until it fits, as every turn is, so the body stays in (R1) and the curvature bound holds.
+the machine area (:func:`planner.turn_slides.slide_turns`). An Ω, the turn between lines
+closer than two turning radii, swings out beyond *both* lines by ``radius - spacing / 2``;
+beside a boundary nearly parallel to the lines, or a step of it, that bulge makes the level Ω
+slide down the boundary for tens of metres, and both lines lose it (a 4 m interval with a 3 m
+radius: 1 m each side). With one of its two ends further back, the Ω's loop leans towards
+that line and no longer swings out beyond the other (:func:`lopsided_turns`). Each variant is
+the vehicle's own turn slid until it fits, as every turn is, so the body stays in (R1) and
+the curvature bound holds.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from planner.coverage import Chains
-from planner.line_end_references import fitted_numpy
+from planner.turn_slides import slide_turns
 from planner.turns import TurnCurves, TurnEnds, concat_turns, take_turns, vehicle_turns
 from planner.types import Vehicle
 
@@ -45,42 +46,6 @@ class LopsidedPairs(NamedTuple):
     v_start: FloatArray
     first: IntArray  # the line each turn leaves ...
     second: IntArray  # ... and the one it joins
-
-
-def slide_turns(
-    curves: TurnCurves, top: BoolArray, machine: Chains, *, tolerance_m: float
-) -> tuple[TurnCurves, FloatArray, BoolArray]:
-    """Slide each turn back along ``v`` until it fits the machine area.
-
-    ``top``: whether each turn is at the upper chain; ``tolerance_m``: how far outside the
-    area a point still counts as inside [m].
-
-    Returns
-    -------
-    curves : TurnCurves
-        The turns moved by their shifts.
-    shift : ndarray
-        Each turn's move along ``v`` (down at the top, up at the bottom) [m].
-    fits : ndarray of bool
-        Whether it fits at all.
-    """
-    from planner import fit_kernels  # numba: imported by the first plan that needs it
-
-    fast = fit_kernels.fit_turns(
-        curves.xy,
-        curves.offsets,
-        top,
-        machine.lo_u,
-        machine.lo_v,
-        machine.hi_u,
-        machine.hi_v,
-        tolerance_m,
-    )
-    if fast is None:
-        return fitted_numpy(curves, top, machine, tolerance_m=tolerance_m)
-    shift, fits, xy = fast
-    fitted = TurnCurves(xy, curves.offsets, curves.length_m, curves.turn_rad, curves.radius_m)
-    return fitted, shift, fits
 
 
 def pair_ends(

@@ -9,12 +9,13 @@ from __future__ import annotations
 import math
 import re
 import uuid
+from collections.abc import Callable
 from pathlib import Path
 
 import gpxpy
 import pytest
 from lxml import etree
-from playwright.sync_api import Locator, Page, expect
+from playwright.sync_api import APIResponse, Locator, Page, Route, expect
 
 from tests.browser.conftest import GPX_SCHEMA, PAPER_FIELD, MapPageOpener
 
@@ -76,23 +77,51 @@ def import_paper_field(page: Page) -> None:
     expect(page.get_by_label("Interval (m)")).to_have_value("4")
 
 
+def answer_to(page: Page, path: str, act: Callable[[], object], *, method: str) -> APIResponse:
+    """Do ``act``; return the server's answer, body and all, to its ``method`` request to ``path``.
+
+    The answer is relayed (``route.fetch``, then ``route.fulfill`` with it), so its body is the
+    one Playwright fetched, not Chromium's record of the page's own request. Chromium does not
+    always keep the body of a response the page has read, and Playwright (1.63 on) then gives a
+    POST's answer an empty body rather than an error: ``json()`` failed on a 200 now and then.
+    """
+    answers: list[APIResponse] = []
+
+    def relay(route: Route) -> None:
+        if route.request.method != method:
+            route.fallback()
+            return
+        answer = route.fetch()
+        answers.append(answer)
+        route.fulfill(response=answer)
+
+    url = f"**{path}"
+    page.route(url, relay)
+    try:
+        # The page has its answer too: what it shows next is drawn from it.
+        with page.expect_response(lambda r: r.request.method == method and r.url.endswith(path)):
+            act()
+    finally:
+        page.unroute(url, relay)
+    assert answers, f"no {method} {path} relayed"
+    return answers[0]
+
+
 def generate(page: Page) -> dict:
     """Press Generate path and return the plan the API answered with."""
-    with page.expect_response("**/api/plans/preview") as answer:
-        button(page, "Generate path").click()
-    assert answer.value.status == 200, answer.value.text()
-    plan: dict = answer.value.json()
+    answer = answer_to(
+        page, "/api/plans/preview", button(page, "Generate path").click, method="POST"
+    )
+    assert answer.status == 200, answer.text()
+    plan: dict = answer.json()
     return plan
 
 
 def save(page: Page, name: str) -> dict:
     page.get_by_label("Plan name").fill(name)
-    with page.expect_response(
-        lambda r: r.request.method == "POST" and r.url.endswith("/api/plans")
-    ) as answer:
-        button(page, "Save plan").click()
-    assert answer.value.status == 201, answer.value.text()
-    plan: dict = answer.value.json()
+    answer = answer_to(page, "/api/plans", button(page, "Save plan").click, method="POST")
+    assert answer.status == 201, answer.text()
+    plan: dict = answer.json()
     return plan
 
 
