@@ -13,14 +13,16 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 from shapely import MultiPolygon, Polygon
 
-from planner.cell_plans import CellCover, CellPlan
+from planner.cell_plans import CellCover, CellPlan, cover_heading
 from planner.cell_route import CellFits, fit_cells
+from planner.decomposition import SweepRings
 from planner.footprints import cell_lines, cells_and_band_m2, lines_in_cells_m2
 from planner.line_ends import FittedLines, end_reach_m
 from planner.lines import from_sweep
@@ -254,6 +256,7 @@ def choose_cells(
     vehicle: Vehicle,
     interval_m: float,
     planned: int | None = None,
+    must_fit: Sequence[int] = (),
 ) -> tuple[FittedCells, float]:
     """R5 on fitted lines, fitting as few headings as it can.
 
@@ -305,7 +308,7 @@ def choose_cells(
         for i in eligible
         if lines(i) == lines(first) and length(i) <= length(first) * (1 + CLOSE_SHARE)
     ][: 1 + CLOSE_PLANS]
-    fitted = {i: fit(cheap(i)) for i in close}
+    fitted = {i: fit(cheap(i)) for i in dict.fromkeys([*close, *must_fit])}
     # The estimate calibrated on the choice: the area each of its turns really lost.
     turns = [_turn_count(c) for c in covers]
     lost = max(covers[first].covered_m2 - fitted[first].cells_m2, 0.0) / max(turns[first], 1)
@@ -339,3 +342,45 @@ def choose_cells(
         shortest = min(shorter, key=length)
         fitted[shortest] = fit(cheap(shortest))
     return choose_fitted([fitted[i] for i in sorted(fitted, key=key)], objective, slack_m2=slack_m2)
+
+
+#: Headings fitted because the decomposed estimate ranks them best for coverage (R5).
+COVER_FITS = 2
+
+
+def cover_picks(
+    prepared: Sequence[SweepRings],
+    headings_deg: npt.NDArray[np.float64],
+    interval_m: float,
+    edge_m: float,
+    vehicle: Vehicle,
+    lengths_m: npt.NDArray[np.float64],
+    slack_m2: float,
+) -> list[int]:
+    """Pick headings to fit by the decomposed estimate of fitted coverage at every heading.
+
+    The :data:`COVER_FITS` best-covering ones, and the :data:`SHORT_FITS` shortest (by
+    ``lengths_m``) of those within ``slack_m2`` of the best.
+    """
+    covered = np.empty(len(headings_deg))
+    length = np.empty(len(headings_deg))
+    change_m, _ = turn_change_m(vehicle, float(interval_m))
+    for a, h in enumerate(headings_deg.tolist()):
+        cover = cover_heading(prepared, h, interval_m, edge_m)
+        covered[a] = estimate_m2(cover, vehicle, interval_m)
+        sc = cover.scan
+        working = float((sc.v_hi - sc.v_lo).sum())
+        turns = _turn_count(cover)
+        cells = cover.line_count - turns
+        move = min(working / max(cover.line_count, 1), 4.0 * interval_m)
+        length[a] = working + turns * (interval_m + change_m) + max(cells - 1, 0) * move
+    lengths_m = length
+    order = np.lexsort((headings_deg, -covered))
+    best = order[:COVER_FITS]
+    keeping = np.flatnonzero(covered >= covered[order[0]] - slack_m2)
+    short = keeping[np.lexsort((headings_deg[keeping], lengths_m[keeping]))][:SHORT_FITS]
+    return list(dict.fromkeys(int(a) for a in [*best, *short]))
+
+
+#: Headings fitted because the estimates rank them shortest among those keeping the rule.
+SHORT_FITS = 2

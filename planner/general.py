@@ -30,6 +30,7 @@ from planner.errors import PlanTooLargeError
 from planner.fitted_cells import (
     FittedCells,
     choose_cells,
+    cover_picks,
     estimate_m2,
     fit_candidate,
     turn_change_m,
@@ -71,6 +72,8 @@ EXTRA_PLANS = 1
 EDGE_PLANS = 3
 #: Beyond this many turn-backs (about as many cells) only the best heading is planned in full.
 MANY_TURN_BACKS = 200
+#: Covered areas closer than this count as equal [m²].
+_SAME_COVER_M2 = 1e-6
 #: Inner-area parts smaller than this are dropped (slivers between headland passes) [m²].
 _SLIVER_M2 = 1e-6
 
@@ -225,6 +228,7 @@ def plan_general(
         prepared = [sweep_rings(p) for p in parts]
         covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
         planned = len(ranked)
+        must_fit: list[int] = []
         if len(ranked) > 1:
             # R5: the ragged estimate can miss the best-covering heading; those it may have
             # misjudged (by as much as it misjudged the ones above) are decomposed too.
@@ -241,6 +245,21 @@ def plan_general(
             rivals = coverage_rivals(ragged, known)
             covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in rivals]
             ranked += rivals
+            # R5: the headings the decomposed estimate of fitted coverage, at every heading,
+            # ranks best-covering, and shortest of those keeping the rule, are fitted too.
+            picks = cover_picks(
+                prepared,
+                headings,
+                d,
+                edge,
+                machine,
+                estimate,
+                angles.COVERAGE_SLACK * float(field_local.area),
+            )
+            extra = [a for a in picks if a not in ranked]
+            covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in extra]
+            ranked += extra
+            must_fit = [ranked.index(a) for a in picks]
         orders: dict[int, CellPlan] = {}
 
         def cheap(i: int) -> CellPlan:
@@ -283,6 +302,7 @@ def plan_general(
             vehicle=machine,
             interval_m=d,
             planned=planned,
+            must_fit=must_fit,
         )
         fits = chosen.fits
         best = chosen.plan
@@ -291,7 +311,13 @@ def plan_general(
         # winner's few cells are reordered with routed moves (many cells cost too much).
         routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
         if routed:  # (straight moves: its order was improved before it was fitted)
-            best = reorder(best, start_xy, after_lines, router.distances)
+            reordered = reorder(best, start_xy, after_lines, router.distances)
+            if reordered.order != best.order:
+                # Another order drives other line directions, whose fitted ends differ: it
+                # is kept only if it covers as much as the heading R5 was held on.
+                refit = fit(reordered)
+                if refit.covered_m2 >= chosen.covered_m2 - _SAME_COVER_M2:
+                    best, chosen, fits = reordered, refit, refit.fits
 
     route = RouteBuilder()
     if start_xy is not None:
