@@ -122,13 +122,16 @@ def _pairwise_sum(values: FloatArray, start: int, n: int) -> float:
 
 @_jit
 def _cuts(critical_u: FloatArray) -> FloatArray:
-    """``planner.decomposition._cuts``: sorted, snapped ``u`` of the critical vertices (no NaN)."""
-    ordered = np.sort(critical_u)
-    cuts = np.empty(len(ordered))
+    """``planner.decomposition._cuts``: sorted, snapped ``u`` of the critical vertices (no NaN).
+
+    Sorts ``critical_u`` in place and returns a view of it.
+    """
+    cuts = critical_u
+    cuts.sort()
     m = 0
-    for i in range(len(ordered)):  # np.unique
-        if m == 0 or ordered[i] != cuts[m - 1]:
-            cuts[m] = ordered[i]
+    for i in range(len(cuts)):  # np.unique
+        if m == 0 or cuts[i] != cuts[m - 1]:
+            cuts[m] = cuts[i]
             m += 1
     keep = np.empty(m, dtype=np.bool_)
     for i in range(m):
@@ -371,7 +374,10 @@ def _screen(
             cell_sizes.append(part_sizes)
         if not ok:
             continue
-        ring_u, ring_v, ring_sizes = _joined(cell_u), _joined(cell_v), _joined(cell_sizes)
+        if parts == 1:
+            ring_u, ring_v, ring_sizes = cell_u[1], cell_v[1], cell_sizes[1]
+        else:
+            ring_u, ring_v, ring_sizes = _joined(cell_u), _joined(cell_v), _joined(cell_sizes)
         cells = len(ring_sizes)
         # No cells, or an empty one: cell_plans._scan_cells leaves those to numpy.
         if cells == 0 or ring_sizes.min() == 0:
