@@ -175,16 +175,12 @@ def _rings(
 
 
 @_jit
-def _joined(arrays: list[npt.NDArray[Any]]) -> npt.NDArray[Any]:
-    """``np.concatenate`` of a list of 1-d arrays (numba's takes tuples only)."""
-    total = 0
-    for a in arrays:
-        total += len(a)
-    out = np.empty(total, dtype=arrays[0].dtype)
-    at = 0
-    for a in arrays:
-        out[at : at + len(a)] = a
-        at += len(a)
+def _grown(buffer: npt.NDArray[Any], used: int, more: int) -> npt.NDArray[Any]:
+    """Return ``buffer`` with room for ``more`` values after ``used`` (else a longer copy)."""
+    if used + more <= len(buffer):
+        return buffer
+    out = np.empty(max(2 * len(buffer), used + more), dtype=buffer.dtype)
+    out[:used] = buffer[:used]
     return out
 
 
@@ -347,11 +343,15 @@ def _screen(
     covered = np.full(headings, np.nan)
     line_count = np.full(headings, -1, dtype=np.int64)
     turn_count = np.full(headings, -1, dtype=np.int64)
+    # Scratch for one heading's cells (rings and chains), grown as needed.
+    all_u, all_v = np.empty(2 * len(x)), np.empty(2 * len(x))
+    all_sizes = np.empty(16, dtype=np.int64)
+    all_chains = np.empty(8 * len(x))
+    chains_at = np.empty(17, dtype=np.int64)
     for a in range(headings):
-        # The cells of every part, in the parts' order.
-        cell_u, cell_v = [np.empty(0)], [np.empty(0)]
-        cell_sizes = [np.empty(0, dtype=np.int64)]
+        # The cells of every part, in the parts' order, laid end to end.
         ok = True
+        vertices = cells = 0
         for p in range(parts):
             i0, i1 = part_vertices[p], part_vertices[p + 1]
             r0, r1 = part_rings[p], part_rings[p + 1]
@@ -369,16 +369,17 @@ def _screen(
             )
             if not ok:
                 break
-            cell_u.append(part_u)
-            cell_v.append(part_v)
-            cell_sizes.append(part_sizes)
+            all_u = _grown(all_u, vertices, len(part_u))
+            all_v = _grown(all_v, vertices, len(part_v))
+            all_sizes = _grown(all_sizes, cells, len(part_sizes))
+            all_u[vertices : vertices + len(part_u)] = part_u
+            all_v[vertices : vertices + len(part_v)] = part_v
+            all_sizes[cells : cells + len(part_sizes)] = part_sizes
+            vertices += len(part_u)
+            cells += len(part_sizes)
         if not ok:
             continue
-        if parts == 1:
-            ring_u, ring_v, ring_sizes = cell_u[1], cell_v[1], cell_sizes[1]
-        else:
-            ring_u, ring_v, ring_sizes = _joined(cell_u), _joined(cell_v), _joined(cell_sizes)
-        cells = len(ring_sizes)
+        ring_u, ring_v, ring_sizes = all_u[:vertices], all_v[:vertices], all_sizes[:cells]
         # No cells, or an empty one: cell_plans._scan_cells leaves those to numpy.
         if cells == 0 or ring_sizes.min() == 0:
             continue
@@ -387,14 +388,17 @@ def _screen(
             starts[c] = starts[c - 1] + ring_sizes[c - 1]
         offsets, line_u, v_lo, v_hi = _scan(ring_u, ring_v, starts, ring_sizes, d, edge)
         # Each cell's chains (coverage.convex_chains), packed end to end for _laid_out.
-        packed_cells = [np.empty(0)]
+        chains_at = _grown(chains_at, 0, cells + 1)
+        chains_at[0] = 0
         for c in range(cells):
             s = starts[c]
             n_lo, _, packed = _chains(ring_u[s : s + ring_sizes[c]], ring_v[s : s + ring_sizes[c]])
             if n_lo < 0:
                 ok = False
                 break
-            packed_cells.append(packed)
+            all_chains = _grown(all_chains, chains_at[c], len(packed))
+            all_chains[chains_at[c] : chains_at[c] + len(packed)] = packed
+            chains_at[c + 1] = chains_at[c] + len(packed)
         if not ok:
             continue
         lines = len(line_u)
@@ -403,15 +407,16 @@ def _screen(
             with_lines += offsets[c + 1] > offsets[c]
         area_m2 = 0.0
         if lines > 0:
-            vouched, odd, area, _ = _laid_out(_joined(packed_cells), offsets, line_u, v_lo, v_hi, d)
+            vouched, odd, area, _ = _laid_out(
+                all_chains[: chains_at[cells]], offsets, line_u, v_lo, v_hi, d
+            )
             if not vouched:
                 continue
             # covered_cells: the cells measured on their own first, in order, then the rest.
             for c in odd:
                 k0, k1 = offsets[c], offsets[c + 1]
-                ok, alone_m2 = _covered_area(
-                    packed_cells[c + 1], line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], d
-                )
+                chains = all_chains[chains_at[c] : chains_at[c + 1]]
+                ok, alone_m2 = _covered_area(chains, line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], d)
                 if not ok:
                     break
                 area_m2 += alone_m2
