@@ -24,16 +24,13 @@ from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
 from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
-from planner.coverage_rivals import coverage_rivals, ragged_deficit_m2
 from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
 from planner.fitted_cells import (
     FittedCells,
     choose_cells,
     cover_picks,
-    estimate_m2,
     fit_candidate,
-    turn_change_m,
 )
 from planner.fitted_choice import edge_headings
 from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
@@ -228,34 +225,12 @@ def plan_general(
         prepared = [sweep_rings(p) for p in parts]
         covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
         planned = len(ranked)
+        slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
         must_fit: list[int] = []
         if len(ranked) > 1:
-            # R5: the ragged estimate can miss the best-covering heading; those it may have
-            # misjudged (by as much as it misjudged the ones above) are decomposed too.
-            # The rounded misses, as above: a last-bit difference between CPUs must not
-            # change which headings are decomposed.
-            ragged = ragged_deficit_m2(
-                missed, scores.pieces, scores.turn_backs, turn_change_m(machine, d)[1], d
-            )
-            parts_m2 = float(sum(p.area for p in parts))
-            known = {
-                a: parts_m2 - estimate_m2(c, machine, d)
-                for a, c in zip(ranked, covers, strict=True)
-            }
-            rivals = coverage_rivals(ragged, known)
-            covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in rivals]
-            ranked += rivals
-            # R5: the headings the decomposed estimate of fitted coverage, at every heading,
-            # ranks best-covering, and shortest of those keeping the rule, are fitted too.
-            picks = cover_picks(
-                prepared,
-                headings,
-                d,
-                edge,
-                machine,
-                estimate,
-                angles.COVERAGE_SLACK * float(field_local.area),
-            )
+            # R5: the headings that the decomposed estimate of fitted coverage, at every
+            # heading, ranks best-covering are fitted too.
+            picks = cover_picks(prepared, headings, d, edge, machine)
             extra = [a for a in picks if a not in ranked]
             covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in extra]
             ranked += extra
@@ -272,7 +247,6 @@ def plan_general(
         # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
         # the close ones fitted (ends pulled back, lines dropped, the implement's width)
         # and the rule applied to those (planner.fitted_cells).
-        slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
 
         def fit(plan: CellPlan) -> FittedCells:
             # Beyond a few cells the cheap plans order them greedily; a heading fitted is a

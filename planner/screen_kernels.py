@@ -481,8 +481,11 @@ def screen_covers(
     y = np.concatenate([r.y for r in prepared])
     if not (np.isfinite(x).all() and np.isfinite(y).all()):
         return _by_python(prepared, headings, d, edge, np.arange(len(headings)))
-    # planner.lines.to_sweep's cosines: numpy's, of the same radians.
+    # planner.lines.to_sweep's cosines: numpy's of each heading's radians, one at a time (an
+    # array's may take another SIMD path, and differ in the last bit, on some CPUs).
     theta = np.radians(headings)
+    cos_t = np.array([np.cos(t) for t in theta])
+    sin_t = np.array([np.sin(t) for t in theta])
     status, covered, line_count, turn_count = _screen(
         x,
         y,
@@ -494,8 +497,8 @@ def screen_covers(
         np.concatenate([r.prv for r in prepared]).astype(np.int64),
         np.cumsum([0] + [len(r.x) for r in prepared], dtype=np.int64),
         np.cumsum([0] + [len(r.sizes) for r in prepared], dtype=np.int64),
-        np.cos(theta),
-        np.sin(theta),
+        cos_t,
+        sin_t,
         d,
         edge,
     )
