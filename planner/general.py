@@ -24,15 +24,13 @@ from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
 from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
-from planner.coverage_rivals import coverage_rivals, ragged_deficit_m2
 from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
 from planner.fitted_cells import (
     FittedCells,
     choose_cells,
-    estimate_m2,
+    cover_picks,
     fit_candidate,
-    turn_change_m,
 )
 from planner.fitted_choice import edge_headings
 from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
@@ -71,6 +69,8 @@ EXTRA_PLANS = 1
 EDGE_PLANS = 3
 #: Beyond this many turn-backs (about as many cells) only the best heading is planned in full.
 MANY_TURN_BACKS = 200
+#: Covered areas closer than this count as equal [m²].
+_SAME_COVER_M2 = 1e-6
 #: Inner-area parts smaller than this are dropped (slivers between headland passes) [m²].
 _SLIVER_M2 = 1e-6
 
@@ -225,22 +225,16 @@ def plan_general(
         prepared = [sweep_rings(p) for p in parts]
         covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
         planned = len(ranked)
+        slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
+        must_fit: list[int] = []
         if len(ranked) > 1:
-            # R5: the ragged estimate can miss the best-covering heading; those it may have
-            # misjudged (by as much as it misjudged the ones above) are decomposed too.
-            # The rounded misses, as above: a last-bit difference between CPUs must not
-            # change which headings are decomposed.
-            ragged = ragged_deficit_m2(
-                missed, scores.pieces, scores.turn_backs, turn_change_m(machine, d)[1], d
-            )
-            parts_m2 = float(sum(p.area for p in parts))
-            known = {
-                a: parts_m2 - estimate_m2(c, machine, d)
-                for a, c in zip(ranked, covers, strict=True)
-            }
-            rivals = coverage_rivals(ragged, known)
-            covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in rivals]
-            ranked += rivals
+            # R5: the headings that the decomposed estimate of fitted coverage, at every
+            # heading, ranks best-covering are fitted too.
+            picks = cover_picks(prepared, headings, d, edge, machine)
+            extra = [a for a in picks if a not in ranked]
+            covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in extra]
+            ranked += extra
+            must_fit = [ranked.index(a) for a in picks]
         orders: dict[int, CellPlan] = {}
 
         def cheap(i: int) -> CellPlan:
@@ -253,7 +247,6 @@ def plan_general(
         # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
         # the close ones fitted (ends pulled back, lines dropped, the implement's width)
         # and the rule applied to those (planner.fitted_cells).
-        slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
 
         def fit(plan: CellPlan) -> FittedCells:
             # Beyond a few cells the cheap plans order them greedily; a heading fitted is a
@@ -283,6 +276,7 @@ def plan_general(
             vehicle=machine,
             interval_m=d,
             planned=planned,
+            must_fit=must_fit,
         )
         fits = chosen.fits
         best = chosen.plan
@@ -291,7 +285,13 @@ def plan_general(
         # winner's few cells are reordered with routed moves (many cells cost too much).
         routed = bool(field_local.interiors) and len(best.cells) <= EXHAUSTIVE_MAX_CELLS
         if routed:  # (straight moves: its order was improved before it was fitted)
-            best = reorder(best, start_xy, after_lines, router.distances)
+            reordered = reorder(best, start_xy, after_lines, router.distances)
+            if reordered.order != best.order:
+                # Another order drives other line directions, whose fitted ends differ: it
+                # is kept only if it covers as much as the heading R5 was held on.
+                refit = fit(reordered)
+                if refit.covered_m2 >= chosen.covered_m2 - _SAME_COVER_M2:
+                    best, chosen, fits = reordered, refit, refit.fits
 
     route = RouteBuilder()
     if start_xy is not None:

@@ -2,9 +2,10 @@
 
 The compiled loops live in :mod:`planner.kernels` (the heading scorers and the helpers the
 other kernel modules build on) and in :mod:`planner.fit_kernels`,
-:mod:`planner.coverage_kernels`, :mod:`planner.cell_kernels`, :mod:`planner.order_kernels` and
-:mod:`planner.edge_kernels`. Each module warms its own kernels; this module, above them all,
-warms them all, so that :mod:`planner.kernels` imports none of the modules that import it.
+:mod:`planner.coverage_kernels`, :mod:`planner.cell_kernels`, :mod:`planner.order_kernels`,
+:mod:`planner.edge_kernels` and :mod:`planner.screen_kernels`. Each module warms its own
+kernels; this module, above them all, warms them all, so that :mod:`planner.kernels` imports
+none of the modules that import it.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from planner import (
     fit_kernels,
     kernels,
     order_kernels,
+    screen_kernels,
 )
 
 
@@ -32,3 +34,4 @@ def warm_up() -> None:
     cell_kernels.warm_up()
     order_kernels.warm_up()
     edge_kernels.warm_up()
+    screen_kernels.warm_up()
