@@ -72,6 +72,10 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
     N_("polygon is self-intersecting"),
     N_("area is {area} m², too small to plan (it must be more than 1 m²)"),
     N_("area is {area} ha; tillpath plans fields up to 2,000 ha at once"),
+    N_(
+        "spans {span} km corner to corner; tillpath plans fields up to {limit} km across "
+        "(is a coordinate mistyped?)"
+    ),
     N_("latitude is outside the 80°S to 84°N range that tillpath plans in"),
     # planner/validation.py: the parameters
     N_("must be between {low} and {high} m, got {value}"),

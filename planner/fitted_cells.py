@@ -374,5 +374,7 @@ def cover_picks(
     _, reach_m = turn_change_m(vehicle, d)
     # As estimate_m2; a heading the decomposition refuses is never picked.
     estimate = np.where(line_count >= 0, covered_m2 - 2.0 * turn_count * reach_m * d, -np.inf)
+    # Rounded to a µm² so that the last bits of another CPU's sums cannot reorder a tie (R7).
+    estimate = np.round(estimate, 6)
     order = np.lexsort((headings_deg, -estimate))
     return [int(a) for a in order[:COVER_FITS] if np.isfinite(estimate[a])]

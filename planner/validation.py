@@ -15,7 +15,7 @@ import shapely
 from shapely import Polygon
 
 from planner.errors import InvalidFieldError, InvalidParameterError
-from planner.projection import UTM_LAT_RANGE_DEG, LocalFrame, geodesic_area_m2
+from planner.projection import UTM_LAT_RANGE_DEG, WGS84, LocalFrame, geodesic_area_m2
 from planner.types import OBJECTIVES, PATTERNS, Objective, Pattern
 
 INTERVAL_RANGE_M = (0.2, 50.0)
@@ -25,6 +25,9 @@ HEADLAND_PASSES_MAX = 5
 MIN_AREA_M2 = 1.0
 MAX_AREA_M2 = 2000.0 * 10_000.0
 MAX_POINT_DISTANCE_M = 5_000.0
+#: A 2,000 ha square is 4.5 km across; a "field" longer than this is a typing slip (a latitude
+#: of 4 for -8.6): planned, its few lines run hundreds of km and its answer is hundreds of MB.
+MAX_SPAN_M = 25_000.0
 #: Real field boundaries have a few hundred vertices (310 at most in shared/fields); a limit
 #: keeps a pasted GPS log or a mistaken file from costing seconds and gigabytes.
 MAX_VERTICES = 2_000
@@ -51,8 +54,9 @@ def validate_field(field_lonlat: Any) -> tuple[Polygon, float]:
     ------
     InvalidFieldError
         If it is not a polygon, has fewer than 3 distinct vertices, non-finite or
-        out-of-range coordinates, is self-intersecting or otherwise invalid, or its area is
-        not more than 1 m² and at most 2,000 ha.
+        out-of-range coordinates, is self-intersecting or otherwise invalid, spans more than
+        25 km (its bounding box's diagonal), or its area is not more than 1 m² and at most
+        2,000 ha.
     """
     if not isinstance(field_lonlat, Polygon):
         kind = getattr(field_lonlat, "geom_type", type(field_lonlat).__name__)
@@ -97,8 +101,24 @@ def validate_field(field_lonlat: Any) -> tuple[Polygon, float]:
             "field",
             f"area is {area_m2 / 10_000:,.0f} ha; tillpath plans fields up to 2,000 ha at once",
         )
+    span_m = _span_m(field_lonlat)
+    if span_m > MAX_SPAN_M:
+        raise InvalidFieldError(
+            "field",
+            f"spans {span_m / 1000:,.0f} km corner to corner; tillpath plans fields up to "
+            f"{MAX_SPAN_M / 1000:g} km across (is a coordinate mistyped?)",
+        )
     # A canonical vertex order (normalize) and orientation keep plans deterministic (R7).
     return shapely.orient_polygons(shapely.normalize(field_lonlat)), area_m2
+
+
+def _span_m(field_lonlat: Polygon) -> float:
+    """Geodesic length of the diagonal of the field's longitude-latitude box [m].
+
+    At least the field's longest extent, and cheap for any number of vertices.
+    """
+    lon_min, lat_min, lon_max, lat_max = field_lonlat.bounds
+    return float(WGS84.inv(lon_min, lat_min, lon_max, lat_max)[2])
 
 
 def _describe_invalid(reason: str) -> str:

@@ -100,6 +100,7 @@ CASES: dict[str, tuple[dict[str, Any] | bytes, tuple[str, ...]]] = {
     "self-intersecting": (body(field=BOWTIE), ("field", "self-intersecting")),
     "huge polygon": (body(field=box(115.0, -8.7, 0.5, 0.5)), ("field", "2,000 ha")),
     "tiny polygon": (body(field=box(115.0, -8.7, 1e-6, 1e-6)), ("field", "too small")),
+    "sliver 1,300 km long": (body(field=box(115.0, -8.7, 1e-4, 12.0)), ("field", "25 km")),
     "two polygons": (
         body(
             field={

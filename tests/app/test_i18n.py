@@ -149,6 +149,12 @@ def test_every_validation_wording_has_a_translatable_template() -> None:
             "objective: harus 'a' or 'b'; interval_m: wajib diisi",
         ),
         ("field: area is 2,345 ha; tillpath plans fields up to 2,000 ha at once", None),
+        (
+            "field: spans 1,396 km corner to corner; tillpath plans fields up to 25 km across "
+            "(is a coordinate mistyped?)",
+            "field: membentang 1.396 km dari sudut ke sudut; tillpath merencanakan sawah paling "
+            "panjang 25 km (apakah ada koordinat yang salah ketik?)",
+        ),
         ("something nobody listed", "something nobody listed"),
         # A list body's item (a batch of fixes) and the answers of a server under load.
         ("[0].t: must lie between 1980 and 2100", "[0].t: harus di antara tahun 1980 dan 2100"),

@@ -72,6 +72,21 @@ def test_huge_area_is_refused() -> None:
         plan(huge)
 
 
+def test_a_sliver_hundreds_of_km_long_is_refused_fast() -> None:
+    # The paper field with one latitude typed as 4 for -8.6265: 1,816 ha, so under the area
+    # limit, but its lines would run 640 km (answered with 1.1 million waypoints in 30 s).
+    sliver = Polygon(
+        [(115.2979, 4.0), (115.29813989, -8.626492), (115.29790448, -8.626244), (115.2979, 4.0)]
+    )
+    with pytest.raises(InvalidFieldError, match=r"^field: spans 1,39\d km corner to corner"):
+        plan(sliver, interval_m=5.0)
+
+
+def test_a_long_narrow_field_within_the_span_is_planned() -> None:
+    strip = field_from_local([(0, 0), (20_000, 0), (20_000, 30), (0, 30)])  # 20 km, 60 ha
+    assert plan(strip, interval_m=5.0).stats.line_count >= 1
+
+
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
 def test_non_finite_coordinates(bad: float) -> None:
     lon, lat = BALI
