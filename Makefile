@@ -4,6 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
 PORT ?= 8000
+# make test runs the tests in this many processes (pytest-xdist), a test file to a process: one
+# per CPU, at most 4 (each starts servers and browsers of its own). TEST_WORKERS=0: one process.
+TEST_WORKERS ?= $(shell n=$$(nproc 2>/dev/null || echo 1); [ $$n -gt 4 ] && n=4; echo $$n)
 
 .PHONY: run test bench soak install install-dev lint typecheck clean screenshot messages lock wheel
 
@@ -58,7 +61,7 @@ test: install-dev
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
 
 # The API benchmark loads the server with wrk (Debian), a real HTTP load generator.
 bench: install-dev

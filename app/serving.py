@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import asyncio
 import inspect
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -319,8 +320,11 @@ def check_uvicorn() -> None:
                 f"{where}: H11Protocol.{name} takes {found}, the guard passes {parameters}"
             )
     try:
-        served = asyncio.run(probe())
-        refused = asyncio.run(probe(limit=0))
+        # In a thread of its own: the caller's thread may already run an event loop (a test
+        # session's browser driver, a notebook), where asyncio.run refuses to start.
+        with ThreadPoolExecutor(max_workers=1) as thread:
+            served = thread.submit(lambda: asyncio.run(probe())).result()
+            refused = thread.submit(lambda: asyncio.run(probe(limit=0))).result()
     except UvicornChangedError:
         raise
     except Exception as exc:  # an import, a constructor or a call that changed

@@ -49,13 +49,13 @@ def server_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ServerUrl]:
         yield base
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def playwright() -> Iterator[Playwright]:
     with sync_playwright() as p:
         yield p
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser(playwright: Playwright) -> Iterator[Browser]:
     browser = playwright.chromium.launch(executable_path=chromium_path(), args=list(CHROMIUM_ARGS))
     yield browser
