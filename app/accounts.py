@@ -14,7 +14,7 @@ from typing import Final
 
 from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError
-from sqlalchemy import delete, func, select
+from sqlalchemy import delete, func, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -36,6 +36,7 @@ from app.auth_models import (
     Organisation,
     User,
 )
+from app.db import end_reads, write
 from app.errors import (
     AccountError,
     ConflictError,
@@ -298,7 +299,6 @@ def _check_throttle(session: Session, username: str, address: str) -> None:
 def _record_failure(session: Session, username: str, address: str) -> None:
     session.add(LoginAttempt(username=username[:NAME_MAX_LENGTH], address=address[:64]))
     session.execute(delete(LoginAttempt).where(LoginAttempt.at < utc_now() - 8 * THROTTLE_WINDOW))
-    session.commit()
 
 
 def authenticate_password(session: Session, username: str, password: str, address: str) -> User:
@@ -316,18 +316,30 @@ def authenticate_password(session: Session, username: str, password: str, addres
     name = username.replace("\x00", "").strip()[:NAME_MAX_LENGTH]
     _check_throttle(session, name, address)
     user = session.scalar(select(User).where(User.username == name))
+    # The password is checked (argon2, tens of ms) with no transaction open, and what sign-in
+    # changes is written in a transaction of its own (app.db.write): on SQLite a read
+    # transaction cannot become a write one once another client (a tractor's fixes) has
+    # written, and says "database is locked" at once.
+    end_reads(session)
     ok = verify_password(
         user.password_hash if user else _DUMMY_HASH, password[:PASSWORD_MAX_LENGTH]
     )
     if user is None or not ok:
-        _record_failure(session, name, address)
+        write(session, lambda s: _record_failure(s, name, address))
         raise SignInError()
-    session.execute(
-        delete(LoginAttempt).where(LoginAttempt.username == name, LoginAttempt.succeeded.is_(False))
-    )
-    if _hasher.check_needs_rehash(user.password_hash):
-        user.password_hash = hash_password(password)
-    session.commit()
+    user_id = user.id
+    new_hash = hash_password(password) if _hasher.check_needs_rehash(user.password_hash) else None
+
+    def succeed(s: Session) -> None:
+        s.execute(
+            delete(LoginAttempt).where(
+                LoginAttempt.username == name, LoginAttempt.succeeded.is_(False)
+            )
+        )
+        if new_hash is not None:
+            s.execute(update(User).where(User.id == user_id).values(password_hash=new_hash))
+
+    write(session, succeed)
     return user
 
 
@@ -341,18 +353,22 @@ class NewLoginSession:
 
 def start_login_session(session: Session, user: User) -> NewLoginSession:
     """Open a signed-in session for ``user`` and commit; return it with its cookie value."""
-    cookie = new_secret()
-    row = LoginSession(
-        token_sha256=sha256_hex(cookie),
-        user_id=user.id,
-        organisation_id=None,
-        csrf_token=new_secret(),
-        expires_at=utc_now() + session_lifetime(),
-    )
-    session.add(row)
-    session.execute(delete(LoginSession).where(LoginSession.expires_at < utc_now()))
-    session.commit()
-    return NewLoginSession(row=row, cookie=cookie)
+    cookie, csrf_token, user_id = new_secret(), new_secret(), user.id
+
+    def work(s: Session) -> LoginSession:
+        row = LoginSession(
+            token_sha256=sha256_hex(cookie),
+            user_id=user_id,
+            organisation_id=None,
+            csrf_token=csrf_token,
+            expires_at=utc_now() + session_lifetime(),
+        )
+        s.add(row)
+        s.execute(delete(LoginSession).where(LoginSession.expires_at < utc_now()))
+        s.flush()
+        return row
+
+    return NewLoginSession(row=write(session, work), cookie=cookie)
 
 
 def end_login_session(session: Session, row: LoginSession) -> None:
