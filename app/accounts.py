@@ -36,7 +36,7 @@ from app.auth_models import (
     Organisation,
     User,
 )
-from app.db import end_reads, write
+from app.db import begin_write, end_reads, write
 from app.errors import (
     AccountError,
     ConflictError,
@@ -207,6 +207,7 @@ def create_token(
     organisation_id : int, optional
         The device token's organisation (required for a device token).
     """
+    begin_write(session)
     label = name.strip()[:NAME_MAX_LENGTH] or ("device" if device else "token")
     if device and organisation_id is None:
         raise AccountError("organisation: a device token belongs to one organisation")
@@ -266,6 +267,7 @@ def revoke_token(session: Session, user: User, access: Access | None, token_id: 
     NotFoundError
         If the user may not see such a token.
     """
+    begin_write(session)
     for token in visible_tokens(session, user, access):
         if token.id == token_id:
             if token.revoked_at is None:
@@ -373,12 +375,14 @@ def start_login_session(session: Session, user: User) -> NewLoginSession:
 
 def end_login_session(session: Session, row: LoginSession) -> None:
     """Sign out: delete the session row (the cookie stops working at once) and commit."""
+    begin_write(session)
     session.delete(row)
     session.commit()
 
 
 def choose_organisation(session: Session, row: LoginSession, organisation_id: int) -> None:
     """Make ``organisation_id`` the one a signed-in page acts in (a member's only)."""
+    begin_write(session)
     member = session.scalar(
         select(Membership).where(
             Membership.user_id == row.user_id, Membership.organisation_id == organisation_id
@@ -459,6 +463,7 @@ def add_member(
     AccountError
         For an unknown user without a password, or a bad name or password.
     """
+    begin_write(session)
     check_role(role)
     name = check_username(username)
     user = session.scalar(select(User).where(User.username == name))
@@ -486,6 +491,7 @@ def add_member(
 
 def change_member_role(session: Session, organisation_id: int, user_id: int, role: str) -> None:
     """Change a member's role; the last owner stays an owner."""
+    begin_write(session)
     member = _membership(session, organisation_id, user_id)
     if role != "owner":
         _keep_an_owner(session, member)
@@ -495,6 +501,7 @@ def change_member_role(session: Session, organisation_id: int, user_id: int, rol
 
 def remove_member(session: Session, organisation_id: int, user_id: int) -> None:
     """Take a user out of the organisation; the last owner stays."""
+    begin_write(session)
     member = _membership(session, organisation_id, user_id)
     _keep_an_owner(session, member)
     session.delete(member)

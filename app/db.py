@@ -183,6 +183,19 @@ def end_reads(session: Session) -> None:
         session.commit()
 
 
+def begin_write(session: Session) -> None:
+    """End the session's reads and begin the transaction that reads and writes a change.
+
+    For a change whose checks must hold when it is written (the last owner of an
+    organisation, a token the caller may see): the checks and the writes share one
+    transaction, which on SQLite begins with ``BEGIN IMMEDIATE`` and so waits for the write
+    lock (the busy timeout). Begun as a read, it would fail at once with "database is locked"
+    whenever another client (a tractor's fixes) wrote before it did. The caller commits.
+    """
+    end_reads(session)
+    session.connection(execution_options={_IMMEDIATE: True})
+
+
 def is_transient(exc: BaseException) -> bool:
     """Return True if ``exc`` is a write that lost a race and may succeed when retried.
 

@@ -18,6 +18,7 @@ from sqlalchemy.orm import Session
 
 import planner
 from app.auth import Access, end_read_transaction, owned, read_owned
+from app.db import begin_write
 from app.field_schemas import FieldCreate, FieldList, FieldRead, FieldUpdate, PlansOnDelete
 from app.models import PLAN_NAME_MAX_LENGTH, Field, Plan, utc_now
 from app.schemas import PlanCreate
@@ -98,6 +99,7 @@ def read_field_view(session: Session, field_id: int, access: Access) -> FieldRea
 
 def create_field(session: Session, body: FieldCreate, access: Access) -> Field:
     """Validate and store a field of the organisation (committed)."""
+    begin_write(session)
     boundary, start, finish = _boundary(body.boundary)
     field = Field(
         organisation_id=access.organisation_id,
@@ -115,6 +117,7 @@ def create_field(session: Session, body: FieldCreate, access: Access) -> Field:
 
 def update_field(session: Session, field_id: int, body: FieldUpdate, access: Access) -> Field:
     """Change what ``body`` gives of field ``field_id`` (committed); plans keep their copy."""
+    begin_write(session)
     field = read_field(session, field_id, access)
     given = body.model_fields_set
     if "name" in given and body.name is not None:
@@ -136,6 +139,7 @@ def update_field(session: Session, field_id: int, body: FieldUpdate, access: Acc
 
 def delete_field(session: Session, field_id: int, access: Access, *, plans: PlansOnDelete) -> int:
     """Delete field ``field_id``; keep or delete its plans. Return how many plans went."""
+    begin_write(session)
     field = read_field(session, field_id, access)
     removed = 0
     plan_ids = owned(Plan, access).with_only_columns(Plan.id).where(Plan.field_id == field.id)
