@@ -99,8 +99,8 @@ def read_field_view(session: Session, field_id: int, access: Access) -> FieldRea
 
 def create_field(session: Session, body: FieldCreate, access: Access) -> Field:
     """Validate and store a field of the organisation (committed)."""
+    boundary, start, finish = _boundary(body.boundary)  # checked before the write lock is held
     begin_write(session)
-    boundary, start, finish = _boundary(body.boundary)
     field = Field(
         organisation_id=access.organisation_id,
         name=body.name.strip() or "field",
@@ -117,13 +117,15 @@ def create_field(session: Session, body: FieldCreate, access: Access) -> Field:
 
 def update_field(session: Session, field_id: int, body: FieldUpdate, access: Access) -> Field:
     """Change what ``body`` gives of field ``field_id`` (committed); plans keep their copy."""
+    given = body.model_fields_set
+    # A new boundary is checked (the planner's validation) before the write lock is held.
+    if "boundary" in given and body.boundary is not None:
+        boundary, _start, _finish = _boundary(body.boundary)
     begin_write(session)
     field = read_field(session, field_id, access)
-    given = body.model_fields_set
     if "name" in given and body.name is not None:
         field.name = body.name.strip() or field.name
     if "boundary" in given and body.boundary is not None:
-        boundary, _start, _finish = _boundary(body.boundary)
         field.boundary = boundary
         field.boundary_sha256 = boundary_sha256(boundary)
     if "start" in given:
