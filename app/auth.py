@@ -40,7 +40,7 @@ from sqlalchemy import Select, bindparam, select, update
 from sqlalchemy.orm import Session
 
 from app.auth_models import ROLES, ApiToken, LoginSession, Membership, Organisation, User
-from app.db import Base, SessionDep
+from app.db import Base, SessionDep, end_reads
 from app.errors import NotFoundError
 from app.models import utc_now
 
@@ -152,17 +152,6 @@ class Access:
         return self.role in ROLES and ROLES.index(self.role) >= ROLES.index(role)
 
 
-def end_read_transaction(session: Session) -> None:
-    """End the reads' transaction so that the route's writes start one of their own.
-
-    SQLite cannot turn a read transaction into a write one once another connection has
-    written meanwhile (it fails at once with "database is locked"); a transaction whose first
-    statement writes waits for the lock instead. Nothing was written, so nothing is committed.
-    """
-    if session.in_transaction():
-        session.commit()
-
-
 def _unauthorized(detail: str) -> HTTPException:
     return HTTPException(
         status.HTTP_401_UNAUTHORIZED, detail, headers={"WWW-Authenticate": "Bearer"}
@@ -215,7 +204,7 @@ def _token_credentials(session: Session, token: str) -> Credentials:
     if row.last_used_at is None or (now - row.last_used_at).total_seconds() > (
         LAST_USED_RESOLUTION_S
     ):
-        end_read_transaction(session)
+        end_reads(session)
         session.execute(update(ApiToken).where(ApiToken.id == row.id).values(last_used_at=now))
         session.commit()
         row.last_used_at = now
@@ -375,7 +364,7 @@ def require_role(role: Role) -> Callable[..., Access]:
             )
         if not access.at_least(role):
             raise forbidden(f"this needs the {role} role (you are {access.role})")
-        end_read_transaction(session)
+        end_reads(session)
         return access
 
     dependency.__name__ = f"require_{role}"
@@ -390,7 +379,7 @@ def require_fix_poster(
     access = resolve_access(request, session, creds)
     if access.via != "device" and not access.at_least("planner"):
         raise forbidden(f"this needs the planner role or a device token (you are {access.role})")
-    end_read_transaction(session)
+    end_reads(session)
     return access
 
 
@@ -401,7 +390,7 @@ def current_user(session: SessionDep, creds: CredentialsDep) -> User:
     """Return the signed-in person (session or personal token); 403 for a device token."""
     if creds.via == "device":
         raise forbidden("a device token may only post fixes to live runs of its organisation")
-    end_read_transaction(session)
+    end_reads(session)
     return creds.user
 
 

@@ -14,7 +14,8 @@ from pydantic import BaseModel
 from pydantic import Field as SchemaField
 from sqlalchemy.orm import Session
 
-from app.auth import Access, end_read_transaction, owned
+from app.auth import Access, owned
+from app.db import end_reads
 from app.field_schemas import FieldRead
 from app.fields import boundary_sha256, field_view
 from app.models import PLAN_NAME_MAX_LENGTH, Field
@@ -77,7 +78,7 @@ def import_fields(
         field.boundary_sha256: field
         for field in session.scalars(owned(Field, access).where(Field.boundary_sha256.in_(digests)))
     }
-    end_read_transaction(session)
+    end_reads(session)
     stored: list[Field] = []
     created = 0
     for (name, boundary, spec), digest in zip(rows, digests, strict=True):

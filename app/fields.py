@@ -17,8 +17,8 @@ from sqlalchemy import delete, func, select, update
 from sqlalchemy.orm import Session
 
 import planner
-from app.auth import Access, end_read_transaction, owned, read_owned
-from app.db import begin_write
+from app.auth import Access, owned, read_owned
+from app.db import begin_write, end_reads
 from app.field_schemas import FieldCreate, FieldList, FieldRead, FieldUpdate, PlansOnDelete
 from app.models import PLAN_NAME_MAX_LENGTH, Field, Plan, utc_now
 from app.schemas import PlanCreate
@@ -212,7 +212,7 @@ def attach_field(session: Session, plan: Plan, body: PlanCreate, access: Access)
     """
     plan.organisation_id = access.organisation_id
     plan.field_id = body.field_id
-    end_read_transaction(session)
+    end_reads(session)
     session.add(plan)
     session.flush()
     if body.field_id is not None:

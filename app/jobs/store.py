@@ -16,7 +16,8 @@ from typing import Any, Final, cast
 from sqlalchemy import CursorResult, Engine, select, update
 from sqlalchemy.orm import Session
 
-from app.auth import Access, end_read_transaction
+from app.auth import Access
+from app.db import end_reads
 from app.models import Job, utc_now
 
 #: How long a worker's lease lasts unless renewed by a progress report [s]. A running job whose
@@ -46,7 +47,7 @@ def create_job(session: Session, access: Access, kind: str, params: dict[str, An
     What ``session`` read before (the plan) is committed first: on SQLite a read transaction
     cannot turn into a write once a worker has written since it began (``database is locked``).
     """
-    end_read_transaction(session)
+    end_reads(session)
     now = utc_now()
     requested_by = {"user_id": access.user_id, "role": access.role, "via": access.via}
     job = Job(
@@ -191,7 +192,7 @@ def cancel(session: Session, job_id: int) -> bool:
     A running attempt notices at its next progress report (within a second) and stops; what
     it computed is not stored.
     """
-    end_read_transaction(session)
+    end_reads(session)
     now = utc_now()
     result = session.execute(
         update(Job)
