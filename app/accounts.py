@@ -36,7 +36,7 @@ from app.auth_models import (
     Organisation,
     User,
 )
-from app.db import begin_write, end_reads, write
+from app.db import begin_write, end_reads, serialise_writes, write
 from app.errors import (
     AccountError,
     ConflictError,
@@ -59,6 +59,9 @@ ACCOUNT_FAILURE_LIMIT: Final = 20
 #: of the window.
 ADDRESS_FAILURE_LIMIT: Final = 100
 THROTTLE_WINDOW: Final = dt.timedelta(minutes=15)
+#: Key of the PostgreSQL advisory lock that first sign-ups take one at a time (any constant no
+#: other lock of the app uses).
+FIRST_ACCOUNT_LOCK_KEY: Final = 0x7469_6C6C_0001
 
 _USERNAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._@-]*$")
 _hasher = PasswordHasher()
@@ -124,6 +127,20 @@ def user_count(session: Session) -> int:
     return session.scalar(select(func.count()).select_from(User)) or 0
 
 
+def _hash_in_advance(password: str) -> str | AccountError:
+    """Return ``password``'s Argon2 hash, or the error saying why it cannot be used.
+
+    Called before the write transaction begins, so that no Argon2 (tens of ms of CPU) runs
+    while SQLite's write lock is held and every other writer (a tractor's fixes) waits. Whether
+    the user is new, and so whether the hash or the error matters, is known only inside that
+    transaction: an existing user keeps their password, whatever was given.
+    """
+    try:
+        return hash_password(check_password(password))
+    except AccountError as exc:
+        return exc
+
+
 def create_user(
     session: Session,
     username: str,
@@ -134,7 +151,9 @@ def create_user(
 ) -> User:
     """Add a user with a role in ``organisation`` (made if missing) and commit.
 
-    A user that exists already keeps its password and gets the role in the organisation.
+    A user that exists already keeps its password and gets the role in the organisation. The
+    password is hashed first; the reads and writes then share one write transaction
+    (:func:`app.db.begin_write`).
 
     Raises
     ------
@@ -143,9 +162,25 @@ def create_user(
     """
     name = check_username(username)
     check_role(role)
+    password_hash = _hash_in_advance(password)
+    begin_write(session)
+    return _store_user(session, name, password_hash, organisation=organisation, role=role)
+
+
+def _store_user(
+    session: Session,
+    name: str,
+    password_hash: str | AccountError,
+    *,
+    organisation: str,
+    role: str,
+) -> User:
+    """Do :func:`create_user`'s reads and writes in the caller's write transaction; commit."""
     user = session.scalar(select(User).where(User.username == name))
     if user is None:
-        user = User(username=name, password_hash=hash_password(check_password(password)))
+        if isinstance(password_hash, AccountError):
+            raise password_hash
+        user = User(username=name, password_hash=password_hash)
         session.add(user)
         session.flush()
     org = get_or_create_organisation(session, organisation)
@@ -394,11 +429,21 @@ def choose_organisation(session: Session, row: LoginSession, organisation_id: in
     session.commit()
 
 
+def _refuse_a_second_first_account(session: Session) -> None:
+    if user_count(session) > 0:
+        raise ConflictError(
+            "sign-up: this server has accounts already; ask an owner for one "
+            "(tillpath users create)"
+        )
+
+
 def sign_up_first(session: Session, username: str, password: str, organisation: str) -> User:
     """Create the first account of an empty server (owner of ``organisation``).
 
     The organisation is the default one when the database was migrated with plans already in
-    it; they then belong to this first owner.
+    it; they then belong to this first owner. "No user yet" is checked again in the write
+    transaction that adds the user, which concurrent sign-ups go through one at a time
+    (:func:`app.db.serialise_writes`), so only one of them becomes the owner.
 
     Raises
     ------
@@ -406,12 +451,16 @@ def sign_up_first(session: Session, username: str, password: str, organisation: 
         If there is a user already: accounts then come from an owner (``tillpath users
         create``).
     """
-    if user_count(session) > 0:
-        raise ConflictError(
-            "sign-up: this server has accounts already; ask an owner for one "
-            "(tillpath users create)"
-        )
-    return create_user(session, username, password, organisation=organisation, role="owner")
+    # Checked first without the lock, so that a server with accounts answers at once, whatever
+    # the input, and spends no Argon2 on the request.
+    _refuse_a_second_first_account(session)
+    end_reads(session)
+    name = check_username(username)
+    password_hash = _hash_in_advance(password)
+    begin_write(session)
+    serialise_writes(session, FIRST_ACCOUNT_LOCK_KEY)
+    _refuse_a_second_first_account(session)
+    return _store_user(session, name, password_hash, organisation=organisation, role="owner")
 
 
 # --- Members (owners manage them) -------------------------------------------------------------
@@ -463,14 +512,17 @@ def add_member(
     AccountError
         For an unknown user without a password, or a bad name or password.
     """
-    begin_write(session)
     check_role(role)
     name = check_username(username)
+    password_hash = None if password is None else _hash_in_advance(password)
+    begin_write(session)
     user = session.scalar(select(User).where(User.username == name))
     if user is None:
-        if password is None:
+        if password_hash is None:
             raise AccountError(f"username: no user called {name!r}; give a password to make one")
-        user = User(username=name, password_hash=hash_password(check_password(password)))
+        if isinstance(password_hash, AccountError):
+            raise password_hash
+        user = User(username=name, password_hash=password_hash)
         session.add(user)
         session.flush()
     member = session.scalar(

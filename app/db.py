@@ -36,6 +36,7 @@ from sqlalchemy import (
     event,
     inspect,
     select,
+    text,
 )
 from sqlalchemy.engine import make_url
 from sqlalchemy.exc import DBAPIError, IntegrityError
@@ -194,6 +195,22 @@ def begin_write(session: Session) -> None:
     """
     end_reads(session)
     session.connection(execution_options={_IMMEDIATE: True})
+
+
+def serialise_writes(session: Session, key: int) -> None:
+    """Make the session's write transaction wait until no other holds ``key``, and hold it.
+
+    For a check that must see what a concurrent transaction of the same kind committed, such
+    as "no user yet" before the first sign-up. On PostgreSQL (READ COMMITTED) two such
+    transactions would each see no user and both add one; this takes the transaction-level
+    advisory lock ``key``, released at commit or rollback, and every statement after it sees
+    what the previous holder committed. On SQLite nothing is needed: the write transaction
+    (:func:`begin_write`, ``BEGIN IMMEDIATE``) already holds the database's one write lock.
+    Call it first in the write transaction.
+    """
+    connection = session.connection()
+    if connection.dialect.name == "postgresql":
+        connection.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": key})
 
 
 def is_transient(exc: BaseException) -> bool:

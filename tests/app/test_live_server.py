@@ -16,12 +16,14 @@ import threading
 import time
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import httpx2
 import pytest
 import uvicorn
+from fastapi import FastAPI
 
 from app.db import get_engine, upgrade_database
 from app.main import create_app
@@ -59,14 +61,9 @@ def free_port() -> int:
         return int(sock.getsockname()[1])
 
 
-@pytest.fixture
-def server_url(database_url: str) -> Iterator[ServerUrl]:
-    """Serve the app with uvicorn on a loopback port, in a thread, for one test.
-
-    The database has a first account; ``server_url.headers`` authenticates as it.
-    """
-    account = seed_account(database_url)
-    app = create_app(Settings(database_url=database_url, max_body_bytes=MAX_BODY_BYTES))
+@contextmanager
+def serving(app: FastAPI) -> Iterator[str]:
+    """Serve ``app`` with uvicorn on a loopback port, in a thread; yield its base URL."""
     port = free_port()
     config = uvicorn.Config(
         app, host="127.0.0.1", port=port, log_level="warning", lifespan="off", ws="none"
@@ -79,10 +76,22 @@ def server_url(database_url: str) -> Iterator[ServerUrl]:
         assert thread.is_alive() and time.monotonic() < deadline, "uvicorn did not start"
         time.sleep(0.01)
     try:
-        yield ServerUrl(f"http://127.0.0.1:{port}", account)
+        yield f"http://127.0.0.1:{port}"
     finally:
         server.should_exit = True
         thread.join(timeout=10)
+
+
+@pytest.fixture
+def server_url(database_url: str) -> Iterator[ServerUrl]:
+    """Serve the app with uvicorn on a loopback port, in a thread, for one test.
+
+    The database has a first account; ``server_url.headers`` authenticates as it.
+    """
+    account = seed_account(database_url)
+    app = create_app(Settings(database_url=database_url, max_body_bytes=MAX_BODY_BYTES))
+    with serving(app) as url:
+        yield ServerUrl(url, account)
 
 
 def test_fifty_plans_from_ten_threads_are_all_stored_once(server_url: ServerUrl):
