@@ -26,6 +26,7 @@ from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_hea
 from planner.cell_route import CellFits, add_cells
 from planner.decomposition import sweep_rings
 from planner.errors import PlanTooLargeError
+from planner.fit_screen import turn_table
 from planner.fitted_cells import (
     FittedCells,
     choose_cells,
@@ -230,7 +231,12 @@ def plan_general(
         if len(ranked) > 1:
             # R5: the headings that the decomposed estimate of fitted coverage, at every
             # heading, ranks best-covering are fitted too.
-            picks = cover_picks(prepared, headings, d, edge, machine)
+            # With a radius the estimate errs by more than the rule's slack: its best are
+            # screened fitted, turn by turn (not with passes: turns swing over the headland).
+            table = None
+            if machine.min_turn_radius_m > 0.0 and not headland_passes and pattern != "snake":
+                table = turn_table(machine, d)
+            picks = cover_picks(prepared, headings, d, edge, machine, table)
             extra = [a for a in picks if a not in ranked]
             covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in extra]
             ranked += extra

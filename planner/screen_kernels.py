@@ -34,6 +34,7 @@ import shapely
 from planner.cell_kernels import _scan, _sweep_cells
 from planner.coverage_kernels import _chains, _edge, _laid_out, _piece_area
 from planner.decomposition import SweepRings
+from planner.fit_screen import CACHED_SLIDES, TurnTable, _fit_cell
 from planner.kernel_helpers import _clip, _jit, _right
 
 FloatArray = npt.NDArray[np.float64]
@@ -44,6 +45,7 @@ _MIN_CELL_M2 = 1e-6  # planner.decomposition._MIN_CELL_M2
 _TIE_M = 1e-9  # planner.coverage._TIE_M
 #: numpy's pairwise summation: blocks of this many values are added eight ways at once.
 _PW_BLOCKSIZE = 128
+
 
 #: A heading's status: screened here, or left to :func:`planner.cell_plans.cover_heading`.
 _SCREENED = 0
@@ -335,9 +337,22 @@ def _screen(
     sin_t: FloatArray,
     d: float,
     edge: float,
-) -> tuple[IntArray, FloatArray, IntArray, IntArray]:
-    """:func:`screen_covers` per heading: status, covered area, lines and turns."""
+    table_offsets: IntArray,
+    table_u: FloatArray,
+    table_v: FloatArray,
+    table_u_lo: FloatArray,
+    table_u_hi: FloatArray,
+    table_beyond_m: FloatArray,
+    table_scalars: FloatArray,
+) -> tuple[IntArray, FloatArray, IntArray, IntArray, FloatArray]:
+    """:func:`screen_covers` per heading: status, covered area, lines and turns.
+
+    Given a turn table (:class:`planner.fit_screen.TurnTable`, else empty arrays), also the
+    fitted coverage :func:`screen_fitted` estimates (NaN where not screened).
+    """
     headings = len(cos_t)
+    fitting = len(table_scalars) > 0
+    fitted = np.full(headings, np.nan)
     parts = len(part_vertices) - 1
     status = np.full(headings, _BY_PYTHON, dtype=np.int64)
     covered = np.full(headings, np.nan)
@@ -430,7 +445,62 @@ def _screen(
         covered[a] = area_m2
         line_count[a] = lines
         turn_count[a] = max(lines - with_lines, 0)
-    return status, covered, line_count, turn_count
+        if fitting and lines > 0:
+            fitted[a] = area_m2 - _fitted_m2(
+                all_chains, chains_at, offsets, line_u, v_lo, v_hi, d,
+                (table_offsets, table_u, table_v, table_u_lo, table_u_hi),
+                table_beyond_m, table_scalars,
+            )  # fmt: skip
+    return status, covered, line_count, turn_count, fitted
+
+
+@_jit
+def _fitted_m2(
+    all_chains: FloatArray,
+    chains_at: IntArray,
+    offsets: IntArray,
+    line_u: FloatArray,
+    v_lo: FloatArray,
+    v_hi: FloatArray,
+    d: float,
+    table: tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray],
+    table_beyond_m: FloatArray,
+    table_scalars: FloatArray,
+) -> float:
+    """Return what fitting takes off one heading's cover [m²].
+
+    Each cell is fitted both ways (:func:`planner.fit_screen._fit_cell`) and the two averaged.
+    """
+    work = np.empty((8, len(line_u)))
+    flags = np.empty((3, len(line_u)), dtype=np.bool_)
+    cache_keys = np.empty(5 * CACHED_SLIDES, dtype=np.int64)
+    cache_values = np.empty(2 * CACHED_SLIDES)
+    total = 0.0
+    for c in range(len(offsets) - 1):
+        k0, k1 = offsets[c], offsets[c + 1]
+        if k1 - k0 < 2:
+            continue  # one line: no turn
+        chains = all_chains[chains_at[c] : chains_at[c + 1]]
+        for first_up in (True, False):
+            total += (
+                _fit_cell(
+                    chains,
+                    line_u[k0:k1],
+                    v_lo[k0:k1],
+                    v_hi[k0:k1],
+                    first_up,
+                    table,
+                    table_beyond_m,
+                    table_scalars,
+                    cache_keys,
+                    cache_values,
+                    work[:, k0:k1],
+                    flags[:, k0:k1],
+                    d,
+                )  # fmt: skip
+                / 2.0
+            )
+    return total
 
 
 def screen_covers(
@@ -477,16 +547,68 @@ def screen_covers(
     d, edge = float(interval_m), float(edge_m)
     if not prepared or not len(headings):
         return _by_python(prepared, headings, d, edge, np.arange(len(headings)))
+    rings = _ring_arrays(prepared)
+    if rings is None:
+        return _by_python(prepared, headings, d, edge, np.arange(len(headings)))
+    status, covered, line_count, turn_count, _ = _run_screen(rings, headings, d, edge, None)
+    left = np.flatnonzero(status != _SCREENED)
+    if len(left):
+        slow = _by_python(prepared, headings, d, edge, left)
+        covered[left], line_count[left], turn_count[left] = (s[left] for s in slow)
+    return covered, line_count, turn_count
+
+
+def screen_fitted(
+    prepared: Sequence[SweepRings],
+    headings_deg: npt.ArrayLike,
+    interval_m: float,
+    edge_m: float,
+    table: TurnTable,
+) -> FloatArray:
+    """Estimate the coverage of each heading's cells once fitted for the vehicle [m²].
+
+    The cells and lines of :func:`screen_covers`, each cell's lines fitted from ``table``
+    (:mod:`planner.fit_screen`); NaN at a heading it cannot estimate (a turn beyond the
+    table, a boundary the compiled decomposition leaves to shapely).
+
+    Examples
+    --------
+    An L: along its arms the turns fit best.
+
+    >>> from shapely import Polygon
+    >>> from planner.decomposition import sweep_rings
+    >>> from planner.fit_screen import turn_table
+    >>> from planner.vehicles import resolve_vehicle
+    >>> ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
+    >>> table = turn_table(resolve_vehicle("small_tractor"), 4.0)
+    >>> fitted = screen_fitted([sweep_rings(ell)], [0.0, 45.0], 4.0, 1.35, table)
+    >>> bool(fitted[0] > fitted[1])
+    True
+    """
+    headings = np.atleast_1d(np.asarray(headings_deg, dtype=np.float64)).ravel()
+    rings = _ring_arrays(prepared) if len(headings) else None
+    if rings is None:
+        return np.full(len(headings), np.nan)
+    *_, fitted = _run_screen(rings, headings, float(interval_m), float(edge_m), table)
+    return fitted
+
+
+#: The parts' rings laid end to end: ``x, y`` and eight layout arrays (:func:`_ring_arrays`).
+_Rings = tuple[
+    FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray, IntArray, IntArray,
+    IntArray, IntArray,
+]  # fmt: skip
+
+
+def _ring_arrays(prepared: Sequence[SweepRings]) -> _Rings | None:
+    """Return the parts' rings laid end to end, as :func:`_screen` takes them (None: NaN)."""
+    if not prepared:
+        return None
     x = np.concatenate([r.x for r in prepared])
     y = np.concatenate([r.y for r in prepared])
     if not (np.isfinite(x).all() and np.isfinite(y).all()):
-        return _by_python(prepared, headings, d, edge, np.arange(len(headings)))
-    # planner.lines.to_sweep's cosines: numpy's of each heading's radians, one at a time (an
-    # array's may take another SIMD path, and differ in the last bit, on some CPUs).
-    theta = np.radians(headings)
-    cos_t = np.array([np.cos(t) for t in theta])
-    sin_t = np.array([np.sin(t) for t in theta])
-    status, covered, line_count, turn_count = _screen(
+        return None
+    return (
         x,
         y,
         np.concatenate([r.sizes for r in prepared]).astype(np.int64),
@@ -497,16 +619,36 @@ def screen_covers(
         np.concatenate([r.prv for r in prepared]).astype(np.int64),
         np.cumsum([0] + [len(r.x) for r in prepared], dtype=np.int64),
         np.cumsum([0] + [len(r.sizes) for r in prepared], dtype=np.int64),
-        cos_t,
-        sin_t,
-        d,
-        edge,
     )
-    left = np.flatnonzero(status != _SCREENED)
-    if len(left):
-        slow = _by_python(prepared, headings, d, edge, left)
-        covered[left], line_count[left], turn_count[left] = (s[left] for s in slow)
-    return covered, line_count, turn_count
+
+
+def _run_screen(
+    rings: _Rings, headings: FloatArray, d: float, edge: float, table: TurnTable | None
+) -> tuple[IntArray, FloatArray, IntArray, IntArray, FloatArray]:
+    """Call :func:`_screen` on the rings at ``headings``, fitting from ``table`` if given."""
+    x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings = rings
+    cos_t, sin_t = _sweep_cosines(headings)
+    if table is None:  # empty arrays: fit nothing
+        offsets, empty = np.zeros(1, dtype=np.int64), np.zeros(0)
+        return _screen(
+            x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
+            cos_t, sin_t, d, edge, offsets, empty, empty, empty, empty, empty, empty,
+        )  # fmt: skip
+    return _screen(
+        x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
+        cos_t, sin_t, d, edge, table.offsets, table.u, table.v, table.u_lo, table.u_hi,
+        table.beyond_m, table.scalars,
+    )  # fmt: skip
+
+
+def _sweep_cosines(headings: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """planner.lines.to_sweep's cosines and sines of ``headings`` [deg].
+
+    numpy's of each heading's radians, one at a time: an array's may take another SIMD path,
+    and differ in the last bit, on some CPUs.
+    """
+    theta = np.radians(headings)
+    return np.array([np.cos(t) for t in theta]), np.array([np.sin(t) for t in theta])
 
 
 def _by_python(
@@ -531,10 +673,17 @@ def _by_python(
 
 
 def warm_up() -> None:
-    """Compile the kernel, or load it from the disk cache, on a tiny field (one cut, 3 cells)."""
+    """Compile the kernel, or load it from the disk cache, on a tiny field (one cut, 3 cells).
+
+    Both ways: screening covers, and fitted covers with a small tractor's turns.
+    """
     from shapely import Polygon
 
     from planner.decomposition import sweep_rings
+    from planner.fit_screen import turn_table
+    from planner.vehicles import resolve_vehicle
 
     ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
     screen_covers([sweep_rings(ell)], np.array([0.0, 135.0]), 4.0, 2.0)
+    table = turn_table(resolve_vehicle("small_tractor"), 4.0)
+    screen_fitted([sweep_rings(ell)], np.array([0.0, 135.0]), 4.0, 2.0, table)

@@ -44,18 +44,37 @@ REAL_CASES = [
     # coverage drops by 2 pp within 0.6° there).
     pytest.param("germany_2018_2019", "germany_2018_2019-4", "hand_tractor", id="germany-4"),
     pytest.param("germany_2018_2019", "germany_2018_2019-9", "hand_tractor", id="germany-9"),
-    # Known gap (issue 9, R5): with a turning radius a field's coverage jumps between
-    # headings 1° apart (here 73.3 % at 124°, 70.8 % at the searched 124.6°), and the
-    # decomposed estimate of every heading does not see it (``python -m
-    # bench.heading_brute_force_real small_tractor`` finds real fields short of the rule:
-    # 75 of 223 before the estimate was screened at every heading, about 40 after).
+    # 5.71 and 1.88 pp beyond the slack while headings were ranked on the decomposed
+    # estimate alone: with a radius it misjudges fitted coverage by a few pp; the best by it
+    # are now screened with every cell fitted from a table of the vehicle's turns
+    # (planner.fit_screen).
+    pytest.param("germany_2018_2019", "germany_2018_2019-9", "small_tractor", id="germany-9-small"),
+    pytest.param(
+        "germany_2018_2019", "germany_2018_2019-77", "small_tractor", id="germany-77-small"
+    ),
+    # Known gaps (issue 9, R5): with a turning radius fitted coverage jumps between headings
+    # a degree apart, and the screen's estimate errs by a few tenths of a pp (``python -m
+    # bench.heading_brute_force_real small_tractor``: 21 of 223 real fields short of the
+    # rule, worst 1.27 pp; 43, worst 5.71 pp, before the fitted screen). Here 15° covers
+    # 78.2 %, 18° 79.5 %.
+    pytest.param(
+        "germany_2018_2019",
+        "germany_2018_2019-49",
+        "small_tractor",
+        id="germany-49-small",
+        marks=pytest.mark.xfail(
+            strict=True, raises=AssertionError, reason="R5 not yet held with a turning radius"
+        ),
+    ),
+    # The rule holds here, but the searched plan is 3.7 % longer than the shortest 1° heading
+    # that keeps it (124° against 122°).
     pytest.param(
         "germany_2018_2019",
         "germany_2018_2019-1",
         "small_tractor",
         id="germany-1-small",
         marks=pytest.mark.xfail(
-            strict=True, raises=AssertionError, reason="R5 not yet held with a turning radius"
+            strict=True, raises=AssertionError, reason="1 % of the shortest not yet held"
         ),
     ),
 ]
