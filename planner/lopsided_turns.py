@@ -129,9 +129,8 @@ def lopsided_turns(
     m = len(backs_m)
     # Variants turn by turn: the first line's end pulled back by each, then the second's start.
     k = np.repeat(t, 2 * m)
-    zeros = np.zeros(m)
-    back_end_m = np.broadcast_to(np.concatenate([backs_m, zeros]), (len(t), 2 * m)).ravel()
-    back_start_m = np.broadcast_to(np.concatenate([zeros, backs_m]), (len(t), 2 * m)).ravel()
+    back_end_m = np.tile(np.concatenate([backs_m, np.zeros(m)]), len(t))
+    back_start_m = np.tile(np.concatenate([np.zeros(m), backs_m]), len(t))
     first, second = pairs.first[k], pairs.second[k]
     ends = pair_ends(
         pairs.u, pairs.up, pairs.v_end, pairs.v_start, first, second, back_end_m, back_start_m
