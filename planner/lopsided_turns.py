@@ -21,7 +21,7 @@ import numpy.typing as npt
 
 from planner.coverage import Chains
 from planner.turn_slides import slide_turns
-from planner.turns import TurnCurves, TurnEnds, concat_turns, take_turns, vehicle_turns
+from planner.turns import TurnCurves, TurnEnds, vehicle_turns
 from planner.types import Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -151,12 +151,24 @@ def lopsided_turns(
     shift_start_m[t] = v_shift[best] + inward * back_start_m[best]
     fits = fits.copy()
     fits[t] = True
-    # The chosen variants take the places of their level turns.
-    pick = np.arange(len(fitted))
-    pick[t] = len(fitted) + np.arange(len(t))
-    return (
-        take_turns(concat_turns(fitted, take_turns(moved, best)), pick),
-        shift_end_m,
-        shift_start_m,
-        fits,
-    )
+    return _replaced(fitted, moved, t, best), shift_end_m, shift_start_m, fits
+
+
+def _replaced(fitted: TurnCurves, moved: TurnCurves, t: IntArray, best: IntArray) -> TurnCurves:
+    """Return ``fitted`` with turns ``t`` replaced by the variants ``best`` of ``moved``.
+
+    One gather of the points (``take_turns`` of the variants, appended, then of the whole
+    made two copies and a concatenation of every point).
+    """
+    n = len(fitted)
+    sizes = np.diff(fitted.offsets)
+    starts = fitted.offsets[:-1].copy()
+    sizes[t] = np.diff(moved.offsets)[best]
+    starts[t] = moved.offsets[best] + len(fitted.xy)
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    point = np.repeat(starts - offsets[:-1], sizes) + np.arange(offsets[-1])
+    length_m, turn_rad = fitted.length_m.copy(), fitted.turn_rad.copy()
+    length_m[t], turn_rad[t] = moved.length_m[best], moved.turn_rad[best]
+    xy = np.concatenate([fitted.xy, moved.xy])[point]
+    return TurnCurves(xy, offsets, length_m, turn_rad, fitted.radius_m)

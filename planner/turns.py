@@ -372,6 +372,9 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     if n < _SHAPES_FROM:  # every turn its own shape
         zero = np.zeros(n)
         dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
+        planned = _forward_turns(dx, dy, ends.yaw0, ends.yaw1, None, ends, vehicle, step_m)
+        if planned is not None:
+            return planned
         shapes = _vehicle_turns(TurnEnds(zero, zero, ends.yaw0, dx, dy, ends.yaw1), vehicle, step_m)
         return _translate(shapes, None, ends)
     relative = np.stack([ends.x1 - ends.x0, ends.y1 - ends.y0, ends.yaw0, ends.yaw1])
@@ -390,9 +393,62 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
     shape_of = np.empty(n, dtype=np.int64)
     shape_of[order] = np.cumsum(fresh) - 1
     dx, dy, yaw0, yaw1 = relative[:, first]
+    planned = _forward_turns(dx, dy, yaw0, yaw1, shape_of, ends, vehicle, step_m)
+    if planned is not None:
+        return planned
     zero = np.zeros(len(first))
     shapes = _vehicle_turns(TurnEnds(zero, zero, yaw0, dx, dy, yaw1), vehicle, step_m)
     return _translate(shapes, shape_of, ends)
+
+
+def _forward_turns(
+    dx: FloatArray,
+    dy: FloatArray,
+    yaw0: FloatArray,
+    yaw1: FloatArray,
+    shape_of: IntArray | None,
+    ends: TurnEnds,
+    vehicle: Vehicle,
+    step_m: float,
+) -> TurnCurves | None:
+    """Plan a forward-only vehicle's turns in one call; None if it may reverse or there are none.
+
+    Shape ``s`` runs from the origin to ``(dx, dy)[s]``; turn ``k`` is shape ``shape_of[k]``
+    (None: shape ``k``) moved onto its ends. The same points as ``_vehicle_turns`` and
+    :func:`_translate` give (:func:`planner.turn_kernels.planned_turns`), without their
+    numpy calls on a few turns each.
+    """
+    if vehicle.can_reverse or len(dx) == 0:
+        return None
+    from planner import turn_kernels  # numba: imported by the first plan that needs it
+
+    radius = turning_radius_m(vehicle)
+    if vehicle.min_turn_radius_m > 0.0:  # bulbs below two radii (a pivot: Dubins throughout)
+        narrow = np.hypot(dx, dy) < 2.0 * radius - 1e-9
+    else:
+        narrow = np.zeros(len(dx), dtype=bool)
+    arc_step = min(step_m, 2.0 * radius * math.acos(max(-1.0, 1.0 - SAGITTA_M / radius)))
+    planned = turn_kernels.planned_turns(
+        dx,
+        dy,
+        yaw0,
+        yaw1,
+        narrow,
+        radius,
+        arc_step,
+        step_m,
+        np.arange(len(dx)) if shape_of is None else shape_of,
+        (ends.x0, ends.y0, ends.x1, ends.y1),
+    )
+    if planned is None:
+        raise ValueError("no Dubins word joins these poses")  # as dubins_words
+    xy, offsets, signs, lengths = planned
+    size = np.abs(lengths)
+    length = size.sum(axis=1)
+    turning = np.where(signs != 0, size / radius, 0.0).sum(axis=1)
+    if shape_of is not None:
+        length, turning = length[shape_of], turning[shape_of]
+    return TurnCurves(xy, offsets, length, turning, float(radius))
 
 
 def _translate(shapes: TurnCurves, shape_of: IntArray | None, ends: TurnEnds) -> TurnCurves:

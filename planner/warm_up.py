@@ -3,9 +3,9 @@
 The compiled loops live in :mod:`planner.kernels` (the heading scorers and the helpers the
 other kernel modules build on) and in :mod:`planner.fit_kernels`,
 :mod:`planner.coverage_kernels`, :mod:`planner.cell_kernels`, :mod:`planner.order_kernels`,
-:mod:`planner.edge_kernels` and :mod:`planner.screen_kernels`. Each module warms its own
-kernels; this module, above them all, warms them all, so that :mod:`planner.kernels` imports
-none of the modules that import it.
+:mod:`planner.edge_kernels`, :mod:`planner.screen_kernels` and :mod:`planner.turn_kernels`.
+Each module warms its own kernels; this module, above them all, warms them all, so that
+:mod:`planner.kernels` imports none of the modules that import it.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from planner import (
     kernels,
     order_kernels,
     screen_kernels,
+    turn_kernels,
 )
 
 
@@ -35,3 +36,4 @@ def warm_up() -> None:
     order_kernels.warm_up()
     edge_kernels.warm_up()
     screen_kernels.warm_up()
+    turn_kernels.warm_up()
