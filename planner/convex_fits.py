@@ -4,8 +4,9 @@
 :func:`fit_headings` does the same at many headings of one field and measures what each
 covers: R5's check on a small field fits every heading the search scored (some 50 to 500),
 and one at a time that was mostly call overhead (1 ms a heading for a few lines). Here the
-turns of every heading are planned in one call (:func:`planner.line_ends.plan_line_turns`),
-and each heading keeps only the numpy work of its own few lines.
+turns of every heading, and the lopsided variants of those that need them, are planned in one
+call each (:func:`planner.line_ends.fit_line_turns`), and each heading keeps only the numpy
+work of its own few lines.
 """
 
 from __future__ import annotations
@@ -21,16 +22,17 @@ from shapely import MultiPolygon, Polygon
 from planner.coverage import Chains, convex_chains, covered_each_cell
 from planner.errors import InvalidParameterError
 from planner.line_ends import (
+    FirstTurns,
     FittedLines,
+    fit_line_turns,
     fit_lines,
     machine_area,
-    plan_line_turns,
     side_reach_m,
     snake_skip,
 )
 from planner.lines import line_positions, to_sweep
 from planner.ordering import order_boustrophedon, order_snake
-from planner.turns import TurnCurves, turning_radius_m
+from planner.turns import turning_radius_m
 from planner.types import Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -79,7 +81,7 @@ def convex_lines(
     """
     if area is None:  # the same at every heading: a caller fitting many passes it in
         area = convex_machine_area(field_local, vehicle)
-    placed = _place(field_local, area, heading_deg, interval_m, vehicle, pattern, variant)
+    placed = _place(_Rings(field_local, area), heading_deg, interval_m, vehicle, pattern, variant)
     return _fit(placed, interval_m, vehicle, None)
 
 
@@ -129,11 +131,13 @@ def fit_headings(
     """
     if area is None:
         area = convex_machine_area(field_local, vehicle)
+    rings = _Rings(field_local, area)
     placed = [
-        _place(field_local, area, float(h), interval_m, vehicle, pattern, int(k))
+        _place(rings, float(h), interval_m, vehicle, pattern, int(k))
         for h, k in zip(headings_deg, variants, strict=True)
     ]
-    planned = plan_line_turns([(p.u, p.v_start, p.v_end, p.index) for p in placed], vehicle)
+    ordered = [(p.u, p.v_start, p.v_end, p.index) for p in placed]
+    planned = fit_line_turns(ordered, [p.machine for p in placed], vehicle)
     fits: list[FittedLines | InvalidParameterError] = []
     for lines, turns in zip(placed, planned, strict=True):
         try:
@@ -175,9 +179,19 @@ def convex_machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon:
     return area
 
 
+class _Rings:
+    """The rings of a convex field and of its machine area, local [m]: the same at every heading."""
+
+    __slots__ = ("field", "machine")
+
+    def __init__(self, field_local: Polygon, area: Polygon) -> None:
+        # get_coordinates: np.asarray(.coords), cheaper.
+        self.machine = shapely.get_coordinates(area.exterior)[:-1]
+        self.field = shapely.get_coordinates(field_local.exterior)[:-1]
+
+
 def _place(
-    field_local: Polygon,
-    area: Polygon,
+    rings: _Rings,
     heading_deg: float,
     interval_m: float,
     vehicle: Vehicle,
@@ -186,10 +200,10 @@ def _place(
 ) -> _Placed:
     """Place one heading's lines in driving order, ending on the machine area's chains."""
     d = float(interval_m)
-    ring = shapely.get_coordinates(area.exterior)[:-1]  # np.asarray(.coords), cheaper
+    ring = rings.machine
     mu, mv = to_sweep(ring[:, 0], ring[:, 1], heading_deg)
     machine = convex_chains(mu, mv)
-    outer = shapely.get_coordinates(field_local.exterior)[:-1]
+    outer = rings.field
     fu, fv = to_sweep(outer[:, 0], outer[:, 1], heading_deg)
     u_min, u_max = float(fu.min()), float(fu.max())
     skip = snake_skip(vehicle, d) if pattern == "snake" else 1
@@ -216,7 +230,7 @@ def _place(
 
 
 def _fit(
-    placed: _Placed, interval_m: float, vehicle: Vehicle, planned: TurnCurves | None
+    placed: _Placed, interval_m: float, vehicle: Vehicle, first_turns: FirstTurns | None
 ) -> FittedLines:
     """Fit the placed lines; a field too narrow for any turn is refused by name."""
     fit = fit_lines(
@@ -226,7 +240,7 @@ def _fit(
         placed.index,
         machine=placed.machine,
         vehicle=vehicle,
-        planned=planned,
+        first_turns=first_turns,
     )
     # Narrower than the turning circle and the body: no turn can fit, say so.
     width = placed.width_m

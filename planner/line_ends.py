@@ -29,7 +29,14 @@ from shapely import MultiPolygon, Polygon
 
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
-from planner.lopsided_turns import LopsidedPairs, lopsided_turns, pair_ends, tried_lopsided
+from planner.lopsided_turns import (
+    LOPSIDED_RADII,
+    LopsidedPairs,
+    lopsided_ends,
+    lopsided_turns,
+    pair_ends,
+    tried_lopsided,
+)
 from planner.turn_slides import slide_turns
 from planner.turns import (
     TurnCurves,
@@ -87,6 +94,7 @@ def fit_lines(
     machine: Chains,
     vehicle: Vehicle,
     planned: TurnCurves | None = None,
+    first_turns: FirstTurns | None = None,
 ) -> FittedLines:
     """Pull line ends back until every turn between consecutive lines fits the machine area.
 
@@ -104,6 +112,8 @@ def fit_lines(
     planned : TurnCurves, optional
         The ``n - 1`` turns between consecutive lines as given, if planned already (many
         cells at once: :func:`planner.cell_route.fit_cells`).
+    first_turns : FirstTurns, optional
+        Those turns fitted already (many headings at once: :func:`fit_line_turns`).
 
     Returns
     -------
@@ -129,7 +139,8 @@ def fit_lines(
     # A turn depends only on the two line ends it joins, as given (the pull-back is its own
     # output), so a refit round reuses every turn whose pair of lines is still adjacent and
     # plans only the turns of the pairs that dropping a line made.
-    turns = _TurnStore(_Lines(u, v_start, v_end, up, index), machine, vehicle, planned)
+    lines = _Lines(u, v_start, v_end, up, index)
+    turns = _TurnStore(lines, machine, vehicle, planned, first_turns)
     for round_ in range(_MAX_ROUNDS):
         k = np.nonzero(keep)[0]
         fit, drop = _fit_once(k, turns)
@@ -249,10 +260,16 @@ class _TurnStore:
     """Every turn fitted so far, by the pair of lines it joins (:func:`fit_lines`' rounds)."""
 
     def __init__(
-        self, lines: _Lines, machine: Chains, vehicle: Vehicle, planned: TurnCurves | None = None
+        self,
+        lines: _Lines,
+        machine: Chains,
+        vehicle: Vehicle,
+        planned: TurnCurves | None = None,
+        first_turns: FirstTurns | None = None,
     ) -> None:
         self.lines, self.machine = lines, machine
         self._planned = planned  # the turns of the first round, if given
+        self._first_turns = first_turns  # ... or those turns fitted, if given
         self._vehicle = vehicle
         self._n = len(lines.u)
         self._slot: dict[int, int] = {}
@@ -270,11 +287,15 @@ class _TurnStore:
         if new:
             pick = np.asarray(new, dtype=np.int64)
             planned = None
-            if self._planned is not None and not slot and len(new) == self._n - 1:
-                planned = self._planned  # the first round: every line and its next
-            curves, shift_end_m, shift_start_m, fits = _fit_turns(
-                first[pick], second[pick], self.lines, self.machine, self._vehicle, planned
-            )
+            first_round = not slot and len(new) == self._n - 1  # every line and its next
+            if first_round and self._first_turns is not None:
+                curves, shift_end_m, shift_start_m, fits = self._first_turns
+            else:
+                if first_round:
+                    planned = self._planned
+                curves, shift_end_m, shift_start_m, fits = _fit_turns(
+                    first[pick], second[pick], self.lines, self.machine, self._vehicle, planned
+                )
             base = len(self.fits)
             for j, i in enumerate(new):
                 slot[keys[i]] = base + j
@@ -317,25 +338,89 @@ def _fit_turns(
     """
     if planned is None:
         ends = pair_ends(lines.u, lines.up, lines.v_end, lines.v_start, first, second)
-        curves = vehicle_turns(ends, vehicle)
-    else:
-        curves = planned
-    top = lines.up[first]
+        planned = vehicle_turns(ends, vehicle)
+    level, tried = _level_turns(lines.u, lines.up, first, second, machine, planned)
+    if not tried.any():
+        return level[0], level[1], level[1].copy(), level[2]
+    pairs = LopsidedPairs(lines.u, lines.up, lines.v_end, lines.v_start, first, second)
+    return lopsided_turns(pairs, machine, vehicle, level, tried, tolerance_m=FIT_TOLERANCE_M)
+
+
+def _level_turns(
+    u: FloatArray,
+    up: BoolArray,
+    first: IntArray,
+    second: IntArray,
+    machine: Chains,
+    curves: TurnCurves,
+) -> tuple[tuple[TurnCurves, FloatArray, BoolArray], BoolArray]:
+    """Slide the turns ``curves`` from line ``first`` to ``second`` level until they fit.
+
+    Also returns which of them to try lopsided.
+    """
+    top = up[first]
     fitted, shift, fits = slide_turns(curves, top, machine, tolerance_m=FIT_TOLERANCE_M)
     # An Ω (lines closer than two radii) swings out beyond both lines: slid back as a whole
     # it can follow a boundary nearly parallel to the lines, or down a step, for tens of
     # metres, or not fit beside it at all. Such a turn is tried lopsided.
-    tried = tried_lopsided(curves, top, np.abs(lines.u[second] - lines.u[first]), shift, fits)
-    if not tried.any():
-        return fitted, shift, shift.copy(), fits
-    return lopsided_turns(
-        LopsidedPairs(lines.u, lines.up, lines.v_end, lines.v_start, first, second),
-        machine,
-        vehicle,
-        (fitted, shift, fits),
-        tried,
-        tolerance_m=FIT_TOLERANCE_M,
-    )
+    spacing_m = np.abs(u[second] - u[first])
+    return (fitted, shift, fits), tried_lopsided(curves, top, spacing_m, shift, fits)
+
+
+#: The first fitting round's turns of a line set: the turns, how far the end of each turn's
+#: first line and the start of its second move [m], and whether each fits
+#: (:func:`_fit_turns`).
+FirstTurns = tuple[TurnCurves, FloatArray, FloatArray, BoolArray]
+
+
+def fit_line_turns(
+    ordered: Sequence[tuple[FloatArray, FloatArray, FloatArray, IntArray]],
+    machines: Sequence[Chains],
+    vehicle: Vehicle,
+) -> list[FirstTurns | None]:
+    """Fit the turns between consecutive lines of many line sets at once (sweep frame).
+
+    :func:`fit_lines`' first round for each set of ``ordered`` (as :func:`plan_line_turns`
+    takes them) on its machine area, as its ``first_turns``; None for a set of one line. The
+    turns, level and lopsided (:mod:`planner.lopsided_turns`), are planned in one call each
+    for all sets: a turn depends only on its own ends (:func:`planner.turns.vehicle_turns`),
+    so each set's are those it would plan alone.
+    """
+    planned = plan_line_turns(ordered, vehicle)
+    levels: list[tuple[LopsidedPairs, tuple[TurnCurves, FloatArray, BoolArray], BoolArray]] = []
+    variants: list[TurnEnds] = []
+    for (u, a, b, _), machine, curves in zip(ordered, machines, planned, strict=True):
+        if curves is not None:
+            pairs = LopsidedPairs(u, b >= a, b, a, np.arange(len(u) - 1), np.arange(1, len(u)))
+            level, tried = _level_turns(u, pairs.up, pairs.first, pairs.second, machine, curves)
+            levels.append((pairs, level, tried))
+            if tried.any():
+                variants.append(lopsided_ends(pairs, level[0].radius_m, tried))
+    if variants:
+        names = ("x0", "y0", "yaw0", "x1", "y1", "yaw1")
+        joined = TurnEnds(*(np.concatenate([getattr(e, c) for e in variants]) for c in names))
+        lopsided = vehicle_turns(joined, vehicle)
+    out: list[FirstTurns | None] = []
+    start = 0
+    fitted = iter(levels)
+    for machine, curves in zip(machines, planned, strict=True):
+        if curves is None:
+            out.append(None)
+            continue
+        pairs, level, tried = next(fitted)
+        if not tried.any():
+            out.append((level[0], level[1], level[1].copy(), level[2]))
+            continue
+        stop = start + 2 * len(LOPSIDED_RADII) * int(tried.sum())
+        variant_turns = turn_range(lopsided, start, stop)
+        out.append(
+            lopsided_turns(
+                pairs, machine, vehicle, level, tried, tolerance_m=FIT_TOLERANCE_M,
+                planned=variant_turns,
+            )
+        )  # fmt: skip
+        start = stop
+    return out
 
 
 def machine_area(field_local: Polygon, vehicle: Vehicle) -> Polygon | MultiPolygon:

@@ -106,6 +106,7 @@ def lopsided_turns(
     tried: BoolArray,
     *,
     tolerance_m: float,
+    planned: TurnCurves | None = None,
 ) -> tuple[TurnCurves, FloatArray, FloatArray, BoolArray]:
     """Try the ``tried`` turns with one line end further back; keep what loses least.
 
@@ -114,6 +115,9 @@ def lopsided_turns(
     of :data:`LOPSIDED_RADII`, and slid until it fits; the one that pulls its two line ends
     back least in total replaces the level turn, if it pulls them back less (or the level
     turn does not fit).
+
+    ``planned``: the variants' turns as :func:`lopsided_ends` gives their ends, if they are
+    planned already (many headings at once: :func:`planner.line_ends.fit_line_turns`).
 
     Returns
     -------
@@ -125,22 +129,14 @@ def lopsided_turns(
     """
     fitted, shift, fits = level
     t = np.nonzero(tried)[0]
-    backs_m = np.array(LOPSIDED_RADII) * fitted.radius_m
-    m = len(backs_m)
-    # Variants turn by turn: the first line's end pulled back by each, then the second's start.
-    k = np.repeat(t, 2 * m)
-    back_end_m = np.tile(np.concatenate([backs_m, np.zeros(m)]), len(t))
-    back_start_m = np.tile(np.concatenate([np.zeros(m), backs_m]), len(t))
-    first, second = pairs.first[k], pairs.second[k]
-    ends = pair_ends(
-        pairs.u, pairs.up, pairs.v_end, pairs.v_start, first, second, back_end_m, back_start_m
-    )
-    top = pairs.up[first]
-    moved, v_shift, v_fits = slide_turns(
-        vehicle_turns(ends, vehicle), top, machine, tolerance_m=tolerance_m
-    )
+    m = 2 * len(LOPSIDED_RADII)
+    k, back_end_m, back_start_m = _variants(t, fitted.radius_m)
+    if planned is None:
+        planned = vehicle_turns(lopsided_ends(pairs, fitted.radius_m, tried), vehicle)
+    top = pairs.up[pairs.first[k]]
+    moved, v_shift, v_fits = slide_turns(planned, top, machine, tolerance_m=tolerance_m)
     loss = np.where(v_fits, 2.0 * np.abs(v_shift) + back_end_m + back_start_m, np.inf)
-    best = np.argmin(loss.reshape(len(t), 2 * m), axis=1) + np.arange(len(t)) * 2 * m
+    best = np.argmin(loss.reshape(len(t), m), axis=1) + np.arange(len(t)) * m
     better = loss[best] < np.where(fits[t], 2.0 * np.abs(shift[t]), np.inf) - 1e-9
     shift_end_m, shift_start_m = shift.copy(), shift.copy()
     if not better.any():
@@ -172,3 +168,30 @@ def _replaced(fitted: TurnCurves, moved: TurnCurves, t: IntArray, best: IntArray
     length_m[t], turn_rad[t] = moved.length_m[best], moved.turn_rad[best]
     xy = np.concatenate([fitted.xy, moved.xy])[point]
     return TurnCurves(xy, offsets, length_m, turn_rad, fitted.radius_m)
+
+
+def lopsided_ends(pairs: LopsidedPairs, radius_m: float, tried: BoolArray) -> TurnEnds:
+    """Return the ends of every variant :func:`lopsided_turns` plans for the ``tried`` turns."""
+    k, back_end_m, back_start_m = _variants(np.nonzero(tried)[0], radius_m)
+    return pair_ends(
+        pairs.u,
+        pairs.up,
+        pairs.v_end,
+        pairs.v_start,
+        pairs.first[k],
+        pairs.second[k],
+        back_end_m,
+        back_start_m,
+    )
+
+
+def _variants(t: IntArray, radius_m: float) -> tuple[IntArray, FloatArray, FloatArray]:
+    """Each variant's turn of ``t`` and how far it pulls the two line ends back [m]."""
+    backs_m = np.array(LOPSIDED_RADII) * radius_m
+    m = len(backs_m)
+    # Variants turn by turn: the first line's end pulled back by each, then the second's start.
+    k = np.repeat(t, 2 * m)
+    # np.tile's values, without its overhead (a few turns, at every heading of a field).
+    back_end_m = np.concatenate([backs_m, np.zeros(m)])[None, :].repeat(len(t), axis=0).ravel()
+    back_start_m = np.concatenate([np.zeros(m), backs_m])[None, :].repeat(len(t), axis=0).ravel()
+    return k, back_end_m, back_start_m

@@ -220,8 +220,9 @@ def test_turn_fitting_kernel_equals_numpy(seed: int) -> None:
                 continue
             interval = float(rng.choice([1.0, 2.5, 4.0]))
             heading = float(rng.uniform(0.0, 180.0))
+            rings = convex_fits._Rings(field, area)
             placed = convex_fits._place(
-                field, area, heading, interval, vehicle, "boustrophedon", int(trial % 4)
+                rings, heading, interval, vehicle, "boustrophedon", int(trial % 4)
             )
             if len(placed.u) < 2:
                 continue
