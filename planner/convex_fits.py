@@ -27,11 +27,11 @@ from planner.line_ends import (
     fit_line_turns,
     fit_lines,
     machine_area,
-    side_reach_m,
     snake_skip,
 )
 from planner.lines import line_positions, to_sweep
 from planner.ordering import order_boustrophedon, order_snake
+from planner.turn_reach import side_reach_m
 from planner.turns import turning_radius_m
 from planner.types import Pattern, Vehicle
 

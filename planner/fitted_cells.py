@@ -25,8 +25,9 @@ from planner.cell_route import CellFits, fit_cells
 from planner.decomposition import SweepRings
 from planner.fit_screen import TurnTable
 from planner.footprints import cell_lines, cells_and_band_m2, lines_in_cells_m2
-from planner.line_ends import FittedLines, end_reach_m
+from planner.line_ends import FittedLines
 from planner.lines import from_sweep
+from planner.turn_reach import end_reach_m
 from planner.turns import TurnEnds, vehicle_turns
 from planner.types import Objective, Pattern, Vehicle
 
@@ -145,7 +146,7 @@ def choose_fitted(
 
     Examples
     --------
-    >>> from planner.line_ends import FittedLines, end_reach_m
+    >>> from planner.line_ends import FittedLines
     >>> a = FittedCells(None, {}, 100.0, 50.0, 3, 0.0)  # type: ignore[arg-type]
     >>> b = FittedCells(None, {}, 99.9, 40.0, 4, 0.0)  # type: ignore[arg-type]
     >>> c = FittedCells(None, {}, 90.0, 10.0, 1, 0.0)  # type: ignore[arg-type]
@@ -220,7 +221,7 @@ def estimate(plan: CellPlan, vehicle: Vehicle, spacing_m: float) -> tuple[float,
 
     Every turn (a line that is not a cell's last) is driven by the vehicle and pulls its
     two line ends back: :func:`turn_change_m` per turn on the length, and the pulled-back
-    ends, one interval wide, off the coverage (:func:`planner.line_ends.fitting_loss_m2`'s
+    ends, one interval wide, off the coverage (:func:`planner.turn_reach.fitting_loss_m2`'s
     turn term; the cells already lie in the machine area, so its width term is not taken).
     """
     return estimate_m2(plan, vehicle, spacing_m), estimate_m(plan, vehicle, spacing_m)

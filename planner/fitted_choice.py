@@ -35,8 +35,9 @@ from planner.angles import (
 from planner.convex_fits import convex_machine_area, fit_headings
 from planner.errors import InvalidParameterError
 from planner.heading_coverage import convex_coverage
-from planner.line_ends import FittedLines, edge_loss_m2, end_reach_m
+from planner.line_ends import FittedLines
 from planner.lines import to_sweep
+from planner.turn_reach import edge_loss_m2, end_reach_m
 from planner.types import Objective, Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -307,7 +308,7 @@ def choose_convex(
         return FittedChoice(picked, max(best_m2 - picked.covered_m2, 0.0) / area * 100.0)
     # The search's estimate counts lines, not the slope of the boundary they end on, and on a
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
-    # Edge by edge (planner.line_ends.edge_loss_m2), the choice may still keep the rule.
+    # Edge by edge (planner.turn_reach.edge_loss_m2), the choice may still keep the rule.
     if first is not None and first.covered_m2 > 0.0 and not beaten:
         given_up = _given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
         if given_up is not None:
@@ -407,7 +408,7 @@ def _doubtful_alternatives(
 ) -> list[tuple[float, int]]:
     """Return the alternatives the estimate cannot rank below the choice (a line more or less).
 
-    The estimate charges the fitting per line (:func:`planner.line_ends.fitting_loss_m2`):
+    The estimate charges the fitting per line (:func:`planner.turn_reach.fitting_loss_m2`):
     between headings with as many lines it is fair, but on a field a few lines across a line
     more or less can be off by more than the rule's slack. Such an alternative is doubtful if
     its estimate comes within the rule of what the choice's fitted lines cover.
@@ -459,7 +460,7 @@ def _given_up_by_edges(
     """Coverage the heading gives up by the edge-by-edge estimate [pp], None if beyond R5.
 
     Scored at every candidate heading (:func:`planner.angles.candidate_headings`): straight
-    lines' coverage in closed form less :func:`planner.line_ends.edge_loss_m2`. None also
+    lines' coverage in closed form less :func:`planner.turn_reach.edge_loss_m2`. None also
     where that estimate does not hold (a field only a few turns across).
     """
     ring = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from planner.line_ends import end_reach_m, fitting_loss_m2
 from planner.lines import line_counts, to_sweep
+from planner.turn_reach import end_reach_m, fitting_loss_m2
 from planner.types import Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -92,7 +92,7 @@ def estimated_coverage(
     """Estimate the coverage of fitted lines at every heading: the heading search's score.
 
     Straight lines' closed-form coverage, less what fitting them for ``vehicle`` will take
-    (:func:`planner.line_ends.fitting_loss_m2`: ends on the machine area, pulled back for the
+    (:func:`planner.turn_reach.fitting_loss_m2`: ends on the machine area, pulled back for the
     turns) over ``field_m2``. Compiled (:func:`planner.kernels.estimated_coverage`), with
     :func:`estimated_coverage_numpy` the reference and the fallback.
 

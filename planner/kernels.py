@@ -448,7 +448,7 @@ def _less_fitting(
 ) -> None:
     """``excess`` becomes :func:`planner.heading_coverage.estimated_coverage`, in place.
 
-    The closed-form coverage less :func:`planner.line_ends.fitting_loss_m2` per field area,
+    The closed-form coverage less :func:`planner.turn_reach.fitting_loss_m2` per field area,
     with ``width`` each heading's width: numpy's operations on each element, in its order.
     """
     for h in range(len(excess)):

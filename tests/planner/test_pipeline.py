@@ -270,7 +270,7 @@ def test_angle_search_beats_every_candidate_angle(job: tuple, angles: list[int])
 
 #: How far the search's estimate of the best heading's coverage may fall short of what a
 #: fixed-heading plan really covers: its closed form sees straight lines, less an allowance
-#: for fitting them (planner.line_ends.fitting_loss_m2); 0.1 percentage point.
+#: for fitting them (planner.turn_reach.fitting_loss_m2); 0.1 percentage point.
 ESTIMATE_ERROR = 0.001
 
 
