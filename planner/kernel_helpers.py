@@ -7,8 +7,11 @@ computes what its numpy reference does, to the last bit (see :mod:`planner.kerne
 
 from __future__ import annotations
 
+import hashlib
 import logging
+import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar, cast
 
 import numba
@@ -22,6 +25,46 @@ _COUNT_EPS = 1e-9  # planner.lines._COUNT_EPS
 _log = logging.getLogger(__name__)
 
 _F = TypeVar("_F", bound=Callable[..., object])
+
+#: The file in numba's cache directory that records which kernel sources it was built from.
+_SOURCES_STAMP = "kernel-sources.sha256"
+
+
+def drop_stale_kernels(package_dir: Path, cache_dir: Path) -> bool:
+    """Empty numba's cache of the planner's kernels if any kernel's source has changed.
+
+    Numba checks a cached kernel against its own file only: a kernel that calls one in
+    another file (``screen_kernels._screen`` calls ``fit_screen._fit_cell``) would be loaded
+    as it was compiled, calling the old code, after that other file changed. So the cache
+    records a digest of every planner module that compiles kernels (``@_jit``); on a
+    mismatch its machine code is deleted and compiled again on first use. Returns whether
+    it was. A cache directory that cannot be written is left alone.
+    """
+    digest = hashlib.sha256()
+    for source in sorted(package_dir.glob("*.py")):
+        text = source.read_bytes()
+        if b"@_jit" in text:
+            digest.update(source.name.encode() + b"\0" + text)
+    stamp = cache_dir / _SOURCES_STAMP
+    try:
+        if stamp.read_text() == digest.hexdigest():
+            return False
+    except OSError:
+        pass  # no stamp yet: a new cache, or one from before this check
+    try:
+        for compiled in [*cache_dir.glob("*.nbi"), *cache_dir.glob("*.nbc")]:
+            compiled.unlink(missing_ok=True)
+        cache_dir.mkdir(exist_ok=True)
+        stamp.write_text(digest.hexdigest())
+    except OSError as exc:
+        _log.debug("numba cache %s left as it is: %s", cache_dir, exc)
+        return False
+    return True
+
+
+# The default cache lies next to the modules; NUMBA_CACHE_DIR (an image's) is built afresh.
+if not os.environ.get("NUMBA_CACHE_DIR"):
+    drop_stale_kernels(Path(__file__).parent, Path(__file__).parent / "__pycache__")
 
 
 def _jit(f: _F) -> _F:
