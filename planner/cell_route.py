@@ -17,7 +17,7 @@ from shapely import MultiPolygon, Polygon
 
 from planner.cell_plans import Cell, CellPlan
 from planner.coverage import Chains, cell_area, convex_chains
-from planner.line_ends import FittedLines, fit_lines, plan_line_turns, snake_skip
+from planner.line_ends import FittedLines, fit_line_turns, fit_lines, snake_skip
 from planner.lines import from_sweep
 from planner.ordering import order_boustrophedon, order_snake
 from planner.route_builder import RouteBuilder, add_fitted_lines, densify
@@ -86,25 +86,21 @@ def fit_cells(
     """Fit every cell of ``plan`` in its driving order (see :func:`add_cells`).
 
     ``fits`` holds cells fitted before, by ``(cell, variant)``; new fits are added to it. The
-    turns between the lines of all new cells are planned in one call (a cell has a few
-    lines: planning them cell by cell was mostly call overhead).
+    first fitting round of all new cells plans its turns, level and lopsided, in one call
+    each (:func:`planner.line_ends.fit_line_turns`): a cell has a few lines, and planning
+    them cell by cell was mostly call overhead.
     """
     fits = {} if fits is None else fits
     skip = snake_skip(vehicle, interval_m) if pattern == "snake" else 1
     room = None if turning_room is None else to_sweep_frame(turning_room, plan.heading_deg)
     todo = [key for key in dict.fromkeys(plan.order) if key not in fits]
     ordered = [ordered_cell_lines(plan, c, v, skip=skip) for c, v in todo]
-    planned = plan_line_turns(ordered, vehicle)
-    for (cell_index, variant), (u, a, b, index), turns in zip(todo, ordered, planned, strict=True):
-        fits[cell_index, variant] = fit_lines(
-            u,
-            a,
-            b,
-            index,
-            machine=room_chains(plan.cells[cell_index], room),
-            vehicle=vehicle,
-            planned=turns,
-        )
+    machines = [room_chains(plan.cells[c], room) for c, _ in todo]
+    first_turns = fit_line_turns(ordered, machines, vehicle)
+    for key, (u, a, b, index), machine, turns in zip(
+        todo, ordered, machines, first_turns, strict=True
+    ):
+        fits[key] = fit_lines(u, a, b, index, machine=machine, vehicle=vehicle, first_turns=turns)
     return [fits[key] for key in plan.order]
 
 
