@@ -3,7 +3,7 @@
 ``python -m bench.screen_speed [--step DEG] [--repeats N] [--limit K]`` prepares every real
 field of :mod:`bench.bench_fields` as :func:`planner.general.plan_general` does without
 headland passes (the ``hand_tractor``'s machine area at 4 m, its parts largest first), then
-measures the CPU time (``time.process_time``) of :func:`planner.screen_kernels.screen_covers`
+measures the CPU time (``time.process_time``) of :func:`planner.heading_screen.screen_covers`
 over the headings ``0, DEG, ..., < 180`` (default 1°) of every field, and of a Python loop of
 :func:`planner.cell_plans.cover_heading` over the same. The two runs alternate ``N`` times
 (default 3; the best of each is printed) and their figures are checked equal. The kernels are
@@ -24,9 +24,10 @@ from planner.cell_plans import cover_heading
 from planner.decomposition import SweepRings, sweep_rings
 from planner.errors import PlannerError
 from planner.fitted_cells import _turn_count
+from planner.heading_screen import screen_covers
 from planner.line_ends import machine_area
 from planner.projection import field_frame
-from planner.screen_kernels import screen_covers, warm_up
+from planner.screen_kernels import warm_up
 from planner.vehicles import resolve_vehicle
 
 

@@ -327,7 +327,7 @@ COVER_FITS = 2
 
 
 #: With a turning radius, this many of the headings the estimate ranks best-covering are
-#: screened fitted (:func:`planner.screen_kernels.screen_fitted`) and ranked on that.
+#: screened fitted (:func:`planner.heading_screen.fit_screened`) and ranked on that.
 SCREENED_FITS = 24
 
 
@@ -345,7 +345,7 @@ def cover_picks(
     rule's slack on about one real field in six (35 of 223 at 4 m with the hand tractor);
     the decomposition's estimate (:func:`estimate_m2`: the cells' coverage less the turns'
     pull-back) far less often. So every heading is decomposed, compiled
-    (:func:`planner.screen_kernels.screen_covers`), and the :data:`COVER_FITS` best by that
+    (:func:`planner.heading_screen.screen_cells`), and the :data:`COVER_FITS` best by that
     estimate are picked; ties go to the smaller heading (R7). With a turning radius the
     estimate errs by a few pp between headings (the pull-back depends on the boundary at
     each line end, and lines drop), so its :data:`SCREENED_FITS` best are ranked again on
@@ -384,22 +384,30 @@ def cover_picks(
     >>> headings[picks].tolist()
     [0.0, 90.0]
     """
-    from planner.screen_kernels import screen_covers  # numba: imported by the first plan
+    from planner.heading_screen import fit_screened, screen_cells  # numba: the first plan's
 
     d = float(interval_m)
-    covered_m2, line_count, turn_count = screen_covers(prepared, headings_deg, d, edge_m)
     _, reach_m = turn_change_m(vehicle, d)
+    # With a table, the cells of the headings that may rank among the SCREENED_FITS best are
+    # kept, so that fitting them decomposes none again.
+    screen = screen_cells(
+        prepared,
+        headings_deg,
+        d,
+        edge_m,
+        reach_m=reach_m,
+        keep=0 if turn_table is None else SCREENED_FITS,
+    )
+    covered_m2, line_count, turn_count = screen.covered_m2, screen.line_count, screen.turn_count
     # As estimate_m2; a heading the decomposition refuses is never picked.
     estimate = np.where(line_count >= 0, covered_m2 - 2.0 * turn_count * reach_m * d, -np.inf)
     # Rounded to a µm² so that the last bits of another CPU's sums cannot reorder a tie (R7).
     estimate = np.round(estimate, 6)
     order = np.lexsort((headings_deg, -estimate))  # headings refused sort last
     if turn_table is not None:
-        from planner.screen_kernels import screen_fitted
-
         screened = order[:SCREENED_FITS]
         screened = screened[np.isfinite(estimate[screened])]  # (the refused are last)
-        fitted_m2 = screen_fitted(prepared, headings_deg[screened], d, edge_m, turn_table)
+        fitted_m2 = fit_screened(screen, screened, turn_table)
         rank = np.round(np.where(np.isfinite(fitted_m2), fitted_m2, -np.inf), 6)
         order = np.concatenate(
             [screened[np.lexsort((headings_deg[screened], -rank))], order[len(screened) :]]

@@ -1,7 +1,8 @@
-"""Compiled helpers the planner's kernels share: the decorators, numpy's scalar rules, sorts.
+"""Compiled helpers the planner's kernels share: the decorators, numpy's scalar rules, sorts, sums.
 
 Each helper is numpy's operation on scalars, with its NaN and tie rules (``np.minimum``,
-``np.maximum``, ``np.clip``, ``searchsorted``, ``np.sort``), so a kernel built from them
+``np.maximum``, ``np.clip``, ``searchsorted``, ``np.sort``), or its order of additions
+(``np.add.reduce``'s pairwise sum), so a kernel built from them
 computes what its numpy reference does, to the last bit (see :mod:`planner.kernels`).
 """
 
@@ -221,3 +222,77 @@ def _line_count(width: float, d: float) -> int:
     if width <= d:
         return 1
     return int(np.ceil((width - d) / d - _COUNT_EPS)) + 1
+
+
+#: numpy's pairwise summation: blocks of this many values are added eight ways at once.
+_PW_BLOCKSIZE = 128
+
+
+@_jit
+def _block_sum(values: FloatArray, start: int, n: int) -> float:
+    """Add at most ``_PW_BLOCKSIZE`` values as numpy's ``pairwise_sum`` does: eight ways."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += values[start + i]
+        return res
+    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
+    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
+    i = 8
+    while i < n - n % 8:
+        r0 += values[start + i]
+        r1 += values[start + i + 1]
+        r2 += values[start + i + 2]
+        r3 += values[start + i + 3]
+        r4 += values[start + i + 4]
+        r5 += values[start + i + 5]
+        r6 += values[start + i + 6]
+        r7 += values[start + i + 7]
+        i += 8
+    total: float = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        total += values[start + i]
+        i += 1
+    return total
+
+
+@_jit
+def _pairwise_sum(values: FloatArray, start: int, n: int) -> float:
+    """Add ``values[start:start + n]`` as numpy's ``pairwise_sum`` does (``np.add.reduce``).
+
+    ``values.sum()`` is ``0.0 +`` this; a segment of ``np.add.reduceat`` is its first value
+    ``+`` this of the rest. Above a block, numpy adds the sums of two halves (the first a
+    multiple of 8 long); that recursion runs here on a stack of its own (numba's disk cache
+    mishandles recursive functions: they crash when loaded).
+    """
+    if n <= _PW_BLOCKSIZE:
+        return _block_sum(values, start, n)
+    # Frames: a span, its phase (0 new, 1 left half pending, 2 right half pending), its left sum.
+    depth = 64  # spans halve: 2**64 values
+    at, count = np.empty(depth, np.int64), np.empty(depth, np.int64)
+    phase, left = np.zeros(depth, np.int64), np.empty(depth)
+    top = 0
+    at[0], count[0], phase[0] = start, n, 0
+    result = 0.0
+    while True:
+        if phase[top] == 0 and count[top] > _PW_BLOCKSIZE:
+            half = count[top] // 2
+            half -= half % 8
+            phase[top] = 1
+            top += 1
+            at[top], count[top], phase[top] = at[top - 1], half, 0
+            continue
+        # This frame's sum is known: a block's, or both halves'.
+        result = _block_sum(values, at[top], count[top]) if phase[top] == 0 else left[top] + result
+        top -= 1
+        if top < 0:
+            return result
+        if phase[top] == 1:  # the left half is done: on to the right half
+            half = count[top] // 2
+            half -= half % 8
+            left[top] = result
+            phase[top] = 2
+            top += 1
+            at[top], count[top], phase[top] = at[top - 1] + half, count[top - 1] - half, 0
+        else:
+            phase[top] = 3  # both halves done: its sum is left + result, next round

@@ -1,25 +1,19 @@
-"""Many headings of one field screened in one compiled call: what each heading's cells cover.
+"""Compiled loop over many headings of one field: each heading's cells, lines and cover.
 
 :func:`planner.cell_plans.cover_heading` decomposes the field at a heading into cells, scans
 their lines and measures what the lines cover. Its cores are compiled
-(:mod:`planner.cell_kernels`, :mod:`planner.coverage_kernels`), but the Python around them (the
-rotation, the critical cuts, the cells' rings and chains as objects, the sums) makes it cost
-about 0.5 ms a heading on the real fields. :func:`screen_covers` runs the whole of it for
-every heading in one compiled loop that calls those same cores, and returns only the figures:
-covered area, lines and turns (``bench/screen_speed.py``: about 8 times faster).
+(:mod:`planner.cell_kernels`, :mod:`planner.coverage_kernels`); :func:`_screen` runs the
+whole of it for every heading in one compiled loop that calls those same cores, with the
+numpy glue around them compiled with the numpy code's arithmetic: the decomposition's
+(:mod:`planner.decomposition_kernels`), the measure of a cell whose footprints the laid-out
+form cannot take (``coverage.covered_area``: :func:`_covered_area`) and the total
+(``covered_cells``, whose ``area.sum()`` adds by numpy's pairwise rule). So the figures are
+``cover_heading``'s to the last bit (but the sign of a zero, as in :mod:`planner.cell_kernels`);
+a heading whose cells the cores leave to numpy or shapely is marked for ``cover_heading``.
 
-The glue that lives in numpy there is compiled here with the numpy code's arithmetic, as
-:mod:`planner.cell_kernels` does: the rotation (``to_sweep``'s products, with numpy's own
-cosines), the cuts (``decomposition._cuts``), the cells' size and area filter
-(``decomposition._rings``, whose ``np.add.reduceat`` adds by numpy's pairwise rule), the
-measure of a cell whose footprints the laid-out form cannot take (``coverage.covered_area``)
-and the total (``covered_cells``, whose ``area.sum()`` adds by the same pairwise rule). So the
-figures are :func:`~planner.cell_plans.cover_heading`'s to the last bit (but the sign of a
-zero, as in :mod:`planner.cell_kernels`). What the cores leave to numpy or shapely (a
-boundary too degenerate for the sweep, which shapely clips; footprints wider than the lines'
-spacing; NaN) is measured by :func:`~planner.cell_plans.cover_heading` itself, for that
-heading. ``tests/planner/test_screen_kernels.py`` holds the two equal on real and random
-fields, and each compiled twin equal to its numpy original.
+:func:`_screen` also keeps the cells of the headings that may be fitted next, and
+:func:`_fit_kept` fits those (:mod:`planner.fit_screen`), so no heading is decomposed twice.
+The Python entries are :mod:`planner.heading_screen`'s.
 """
 
 from __future__ import annotations
@@ -29,151 +23,22 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import shapely
 
-from planner.cell_kernels import _scan, _sweep_cells
+from planner.cell_kernels import _scan
 from planner.coverage_kernels import _chains, _edge, _laid_out, _piece_area
 from planner.decomposition import SweepRings
-from planner.fit_screen import CACHED_SLIDES, TurnTable, _fit_cell
-from planner.kernel_helpers import _clip, _jit, _right
+from planner.decomposition_kernels import _part_cells
+from planner.fit_screen import CACHED_SLIDES, _fit_cell
+from planner.kernel_helpers import _clip, _jit, _pairwise_sum, _right
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 
-_SNAP_M = 1e-6  # planner.decomposition._SNAP_M
-_MIN_CELL_M2 = 1e-6  # planner.decomposition._MIN_CELL_M2
 _TIE_M = 1e-9  # planner.coverage._TIE_M
-#: numpy's pairwise summation: blocks of this many values are added eight ways at once.
-_PW_BLOCKSIZE = 128
-
 
 #: A heading's status: screened here, or left to :func:`planner.cell_plans.cover_heading`.
 _SCREENED = 0
 _BY_PYTHON = 1
-
-
-@_jit
-def _block_sum(values: FloatArray, start: int, n: int) -> float:
-    """Add at most ``_PW_BLOCKSIZE`` values as numpy's ``pairwise_sum`` does: eight ways."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += values[start + i]
-        return res
-    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
-    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
-    i = 8
-    while i < n - n % 8:
-        r0 += values[start + i]
-        r1 += values[start + i + 1]
-        r2 += values[start + i + 2]
-        r3 += values[start + i + 3]
-        r4 += values[start + i + 4]
-        r5 += values[start + i + 5]
-        r6 += values[start + i + 6]
-        r7 += values[start + i + 7]
-        i += 8
-    total: float = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        total += values[start + i]
-        i += 1
-    return total
-
-
-@_jit
-def _pairwise_sum(values: FloatArray, start: int, n: int) -> float:
-    """Add ``values[start:start + n]`` as numpy's ``pairwise_sum`` does (``np.add.reduce``).
-
-    ``values.sum()`` is ``0.0 +`` this; a segment of ``np.add.reduceat`` is its first value
-    ``+`` this of the rest. Above a block, numpy adds the sums of two halves (the first a
-    multiple of 8 long); that recursion runs here on a stack of its own (numba's disk cache
-    mishandles recursive functions: they crash when loaded).
-    """
-    if n <= _PW_BLOCKSIZE:
-        return _block_sum(values, start, n)
-    # Frames: a span, its phase (0 new, 1 left half pending, 2 right half pending), its left sum.
-    depth = 64  # spans halve: 2**64 values
-    at, count = np.empty(depth, np.int64), np.empty(depth, np.int64)
-    phase, left = np.zeros(depth, np.int64), np.empty(depth)
-    top = 0
-    at[0], count[0], phase[0] = start, n, 0
-    result = 0.0
-    while True:
-        if phase[top] == 0 and count[top] > _PW_BLOCKSIZE:
-            half = count[top] // 2
-            half -= half % 8
-            phase[top] = 1
-            top += 1
-            at[top], count[top], phase[top] = at[top - 1], half, 0
-            continue
-        # This frame's sum is known: a block's, or both halves'.
-        result = _block_sum(values, at[top], count[top]) if phase[top] == 0 else left[top] + result
-        top -= 1
-        if top < 0:
-            return result
-        if phase[top] == 1:  # the left half is done: on to the right half
-            half = count[top] // 2
-            half -= half % 8
-            left[top] = result
-            phase[top] = 2
-            top += 1
-            at[top], count[top], phase[top] = at[top - 1] + half, count[top - 1] - half, 0
-        else:
-            phase[top] = 3  # both halves done: its sum is left + result, next round
-
-
-@_jit
-def _cuts(critical_u: FloatArray) -> FloatArray:
-    """``planner.decomposition._cuts``: sorted, snapped ``u`` of the critical vertices (no NaN).
-
-    Sorts ``critical_u`` in place and returns a view of it.
-    """
-    cuts = critical_u
-    cuts.sort()
-    m = 0
-    for i in range(len(cuts)):  # np.unique
-        if m == 0 or cuts[i] != cuts[m - 1]:
-            cuts[m] = cuts[i]
-            m += 1
-    keep = np.empty(m, dtype=np.bool_)
-    for i in range(m):
-        keep[i] = i == 0 or i == m - 1 or cuts[i] - cuts[i - 1] > _SNAP_M
-    kept = 0
-    for i in range(m):
-        if keep[i]:
-            cuts[kept] = cuts[i]
-            kept += 1
-    if kept >= 2 and cuts[kept - 1] - cuts[kept - 2] <= _SNAP_M:
-        cuts[kept - 2] = cuts[kept - 1]
-        kept -= 1
-    return cuts[:kept]
-
-
-@_jit
-def _rings(
-    u: FloatArray, v: FloatArray, sizes: IntArray
-) -> tuple[FloatArray, FloatArray, IntArray]:
-    """``planner.decomposition._rings`` laid end to end: the rings of ≥ 3 vertices and area."""
-    out_u, out_v = np.empty(len(u)), np.empty(len(u))
-    out_sizes = np.empty(len(sizes), dtype=np.int64)
-    twice = np.empty(len(u))
-    n_out = w = 0
-    start = 0
-    for r in range(len(sizes)):
-        size = sizes[r]
-        if size >= 3:
-            for i in range(size):
-                j = start + (i + 1 if i + 1 < size else 0)
-                twice[i] = u[start + i] * v[j] - v[start + i] * u[j]
-            # np.add.reduceat: the segment's first value, then numpy's sum of the rest.
-            if (twice[0] + _pairwise_sum(twice, 1, size - 1)) / 2.0 > _MIN_CELL_M2:
-                for i in range(start, start + size):
-                    out_u[w], out_v[w] = u[i], v[i]
-                    w += 1
-                out_sizes[n_out] = size
-                n_out += 1
-        start += size
-    return out_u[:w], out_v[:w], out_sizes[:n_out]
 
 
 @_jit
@@ -184,52 +49,6 @@ def _grown(buffer: npt.NDArray[Any], used: int, more: int) -> npt.NDArray[Any]:
     out = np.empty(max(2 * len(buffer), used + more), dtype=buffer.dtype)
     out[:used] = buffer[:used]
     return out
-
-
-@_jit
-def _part_cells(
-    x: FloatArray,
-    y: FloatArray,
-    sizes: IntArray,
-    first: IntArray,
-    ring_of: IntArray,
-    local: IntArray,
-    nxt: IntArray,
-    prv: IntArray,
-    cos_t: float,
-    sin_t: float,
-) -> tuple[bool, FloatArray, FloatArray, IntArray]:
-    """``planner.decomposition.decompose_sweep`` of one part, its rings laid end to end.
-
-    Returns False (and empty arrays) where that function leaves the cells to numpy or shapely.
-    """
-    n = len(x)
-    u, v = np.empty(n), np.empty(n)
-    for i in range(n):  # planner.lines.to_sweep
-        u[i] = x[i] * cos_t - y[i] * sin_t
-        v[i] = x[i] * sin_t + y[i] * cos_t
-    turn = np.empty(n, dtype=np.bool_)
-    n_turn = 0
-    for i in range(n):
-        turn[i] = (u[i] - u[prv[i]]) * (u[nxt[i]] - u[i]) <= 0.0
-        n_turn += turn[i]
-    critical = np.empty(n_turn)
-    k = 0
-    for i in range(n):
-        if turn[i]:
-            critical[k] = u[i]
-            k += 1
-    cuts = _cuts(critical)
-    if len(cuts) <= 2:
-        outer = sizes[0]
-        return True, u[:outer].copy(), v[:outer].copy(), sizes[:1].copy()
-    status, cell_u, cell_v, cell_sizes = _sweep_cells(
-        u, v, turn, cuts, sizes, first, ring_of, local, nxt, prv
-    )
-    if status != 1:
-        return False, u[:0], v[:0], sizes[:0]
-    ring_u, ring_v, ring_sizes = _rings(cell_u, cell_v, cell_sizes)
-    return True, ring_u, ring_v, ring_sizes
 
 
 @_jit
@@ -321,6 +140,12 @@ def _covered_area(
     return True, first + last - overlap
 
 
+#: A heading estimated more than this below the ``keep``-th best so far cannot rank among the
+#: best ``keep``: :func:`planner.fitted_cells.cover_picks` ranks the estimates rounded to a
+#: µm², and this is a thousand of them [m²].
+_KEEP_MARGIN_M2 = 1e-3
+
+
 @_jit
 def _screen(
     x: FloatArray,
@@ -337,22 +162,25 @@ def _screen(
     sin_t: FloatArray,
     d: float,
     edge: float,
-    table_offsets: IntArray,
-    table_u: FloatArray,
-    table_v: FloatArray,
-    table_u_lo: FloatArray,
-    table_u_hi: FloatArray,
-    table_beyond_m: FloatArray,
-    table_scalars: FloatArray,
-) -> tuple[IntArray, FloatArray, IntArray, IntArray, FloatArray]:
-    """:func:`screen_covers` per heading: status, covered area, lines and turns.
+    reach_m: float,
+    keep: int,
+) -> tuple[
+    IntArray, FloatArray, IntArray, IntArray,
+    IntArray, IntArray, IntArray, IntArray,
+    FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray,
+]:  # fmt: skip
+    """Screen every heading: status, covered area, lines and turns; and cells kept to fit.
 
-    Given a turn table (:class:`planner.fit_screen.TurnTable`, else empty arrays), also the
-    fitted coverage :func:`screen_fitted` estimates (NaN where not screened).
+    The cells and lines of each heading with lines that may rank among the ``keep`` best by
+    the estimate ``covered - 2 * turns * reach_m * d`` (:func:`planner.fitted_cells.estimate_m2`)
+    are kept for :func:`_fit_kept`, laid end to end: ``kept_of[a]`` is heading ``a``'s index
+    ``k`` among them (-1: not kept), its chains ``kept_chains[chain_at[k]:chain_at[k + 1]]``,
+    its cells' starts in them and line offsets ``kept_chains_at`` and ``kept_offsets``
+    ``[cell_at[k]:cell_at[k + 1]]``, its lines ``kept_u``, ``kept_v_lo``, ``kept_v_hi``
+    ``[line_at[k]:line_at[k + 1]]``. A heading is kept unless ``keep`` headings screened
+    before it are estimated more than :data:`_KEEP_MARGIN_M2` higher: those rank before it.
     """
     headings = len(cos_t)
-    fitting = len(table_scalars) > 0
-    fitted = np.full(headings, np.nan)
     parts = len(part_vertices) - 1
     status = np.full(headings, _BY_PYTHON, dtype=np.int64)
     covered = np.full(headings, np.nan)
@@ -363,6 +191,15 @@ def _screen(
     all_sizes = np.empty(16, dtype=np.int64)
     all_chains = np.empty(8 * len(x))
     chains_at = np.empty(17, dtype=np.int64)
+    # The kept headings' cells, and the best estimates so far (greatest first).
+    kept_of = np.full(headings, -1, dtype=np.int64)
+    chain_at, cell_at = np.zeros(headings + 1, np.int64), np.zeros(headings + 1, np.int64)
+    line_at = np.zeros(headings + 1, np.int64)
+    kept_chains = np.empty(0)
+    kept_chains_at, kept_offsets = np.empty(0, np.int64), np.empty(0, np.int64)
+    kept_u, kept_v_lo, kept_v_hi = np.empty(0), np.empty(0), np.empty(0)
+    kept = 0
+    best = np.full(keep, -np.inf)
     for a in range(headings):
         # The cells of every part, in the parts' order, laid end to end.
         ok = True
@@ -445,13 +282,84 @@ def _screen(
         covered[a] = area_m2
         line_count[a] = lines
         turn_count[a] = max(lines - with_lines, 0)
-        if fitting and lines > 0:
-            fitted[a] = area_m2 - _fitted_m2(
-                all_chains, chains_at, offsets, line_u, v_lo, v_hi, d,
-                (table_offsets, table_u, table_v, table_u_lo, table_u_hi),
-                table_beyond_m, table_scalars,
-            )  # fmt: skip
-    return status, covered, line_count, turn_count, fitted
+        if keep == 0:
+            continue
+        estimate = area_m2 - 2.0 * turn_count[a] * reach_m * d
+        if lines > 0 and not estimate < best[keep - 1] - _KEEP_MARGIN_M2:
+            kept_of[a] = kept
+            n_chains = chains_at[cells]
+            kept_chains = _grown(kept_chains, chain_at[kept], n_chains)
+            kept_chains[chain_at[kept] : chain_at[kept] + n_chains] = all_chains[:n_chains]
+            chain_at[kept + 1] = chain_at[kept] + n_chains
+            c0 = cell_at[kept]
+            kept_chains_at = _grown(kept_chains_at, c0, cells + 1)
+            kept_offsets = _grown(kept_offsets, c0, cells + 1)
+            kept_chains_at[c0 : c0 + cells + 1] = chains_at[: cells + 1]
+            kept_offsets[c0 : c0 + cells + 1] = offsets
+            cell_at[kept + 1] = c0 + cells + 1
+            k0 = line_at[kept]
+            kept_u = _grown(kept_u, k0, lines)
+            kept_v_lo = _grown(kept_v_lo, k0, lines)
+            kept_v_hi = _grown(kept_v_hi, k0, lines)
+            kept_u[k0 : k0 + lines] = line_u
+            kept_v_lo[k0 : k0 + lines] = v_lo
+            kept_v_hi[k0 : k0 + lines] = v_hi
+            line_at[kept + 1] = k0 + lines
+            kept += 1
+        if estimate > best[keep - 1]:  # into the best so far, in order
+            i = keep - 1
+            while i > 0 and estimate > best[i - 1]:
+                best[i] = best[i - 1]
+                i -= 1
+            best[i] = estimate
+    return (
+        status, covered, line_count, turn_count,
+        kept_of, chain_at[: kept + 1], cell_at[: kept + 1], line_at[: kept + 1],
+        kept_chains, kept_chains_at, kept_offsets, kept_u, kept_v_lo, kept_v_hi,
+    )  # fmt: skip
+
+
+@_jit
+def _fit_kept(
+    kept_of: IntArray,
+    chain_at: IntArray,
+    cell_at: IntArray,
+    line_at: IntArray,
+    kept_chains: FloatArray,
+    kept_chains_at: IntArray,
+    kept_offsets: IntArray,
+    kept_u: FloatArray,
+    kept_v_lo: FloatArray,
+    kept_v_hi: FloatArray,
+    covered: FloatArray,
+    which: IntArray,
+    d: float,
+    table_offsets: IntArray,
+    table_u: FloatArray,
+    table_v: FloatArray,
+    table_u_lo: FloatArray,
+    table_u_hi: FloatArray,
+    table_beyond_m: FloatArray,
+    table_scalars: FloatArray,
+) -> FloatArray:
+    """Estimate the fitted coverage of the headings ``which`` from their kept cells [m²].
+
+    NaN at a heading whose cells were not kept.
+    """
+    fitted = np.full(len(which), np.nan)
+    table = (table_offsets, table_u, table_v, table_u_lo, table_u_hi)
+    for i in range(len(which)):
+        k = kept_of[which[i]]
+        if k < 0:
+            continue
+        c0, c1 = cell_at[k], cell_at[k + 1]
+        k0, k1 = line_at[k], line_at[k + 1]
+        fitted[i] = covered[which[i]] - _fitted_m2(
+            kept_chains[chain_at[k] : chain_at[k + 1]], kept_chains_at[c0:c1],
+            kept_offsets[c0:c1], kept_u[k0:k1], kept_v_lo[k0:k1], kept_v_hi[k0:k1], d,
+            table, table_beyond_m, table_scalars,
+        )  # fmt: skip
+    return fitted
 
 
 @_jit
@@ -503,96 +411,6 @@ def _fitted_m2(
     return total
 
 
-def screen_covers(
-    prepared: Sequence[SweepRings], headings_deg: npt.ArrayLike, interval_m: float, edge_m: float
-) -> tuple[FloatArray, IntArray, IntArray]:
-    """Measure what :func:`planner.cell_plans.cover_heading` does, at many headings at once.
-
-    Parameters
-    ----------
-    prepared : sequence of SweepRings
-        The field's parts, each prepared by :func:`planner.decomposition.sweep_rings`, in the
-        order ``cover_heading`` takes them.
-    headings_deg : array_like of float
-        Line headings, degrees clockwise from north.
-    interval_m : float
-        Line spacing and footprint width [m].
-    edge_m : float
-        How far inside each cell its outer lines run [m] (``cover_heading``'s ``edge_m``).
-
-    Returns
-    -------
-    covered_m2 : ndarray of float
-        Per heading, ``cover_heading(...).covered_m2`` to the last bit [m²].
-    line_count : ndarray of int
-        Per heading, ``cover_heading(...).line_count``.
-    turn_count : ndarray of int
-        Per heading, the lines less the cells with a line, at least 0
-        (``planner.fitted_cells._turn_count`` of the cover).
-
-    A heading ``cover_heading`` raises at gives NaN, -1 and -1.
-
-    Examples
-    --------
-    An L at 135° has three cells; at 0° one:
-
-    >>> from shapely import Polygon
-    >>> from planner.decomposition import sweep_rings
-    >>> ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
-    >>> covered, lines, turns = screen_covers([sweep_rings(ell)], [0.0, 135.0], 4.0, 2.0)
-    >>> lines.tolist(), turns.tolist()
-    ([15, 23], [14, 20])
-    """
-    headings = np.atleast_1d(np.asarray(headings_deg, dtype=np.float64)).ravel()
-    d, edge = float(interval_m), float(edge_m)
-    if not prepared or not len(headings):
-        return _by_python(prepared, headings, d, edge, np.arange(len(headings)))
-    rings = _ring_arrays(prepared)
-    if rings is None:
-        return _by_python(prepared, headings, d, edge, np.arange(len(headings)))
-    status, covered, line_count, turn_count, _ = _run_screen(rings, headings, d, edge, None)
-    left = np.flatnonzero(status != _SCREENED)
-    if len(left):
-        slow = _by_python(prepared, headings, d, edge, left)
-        covered[left], line_count[left], turn_count[left] = (s[left] for s in slow)
-    return covered, line_count, turn_count
-
-
-def screen_fitted(
-    prepared: Sequence[SweepRings],
-    headings_deg: npt.ArrayLike,
-    interval_m: float,
-    edge_m: float,
-    table: TurnTable,
-) -> FloatArray:
-    """Estimate the coverage of each heading's cells once fitted for the vehicle [m²].
-
-    The cells and lines of :func:`screen_covers`, each cell's lines fitted from ``table``
-    (:mod:`planner.fit_screen`); NaN at a heading it cannot estimate (a turn beyond the
-    table, a boundary the compiled decomposition leaves to shapely).
-
-    Examples
-    --------
-    An L: along its arms the turns fit best.
-
-    >>> from shapely import Polygon
-    >>> from planner.decomposition import sweep_rings
-    >>> from planner.fit_screen import turn_table
-    >>> from planner.vehicles import resolve_vehicle
-    >>> ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
-    >>> table = turn_table(resolve_vehicle("small_tractor"), 4.0)
-    >>> fitted = screen_fitted([sweep_rings(ell)], [0.0, 45.0], 4.0, 1.35, table)
-    >>> bool(fitted[0] > fitted[1])
-    True
-    """
-    headings = np.atleast_1d(np.asarray(headings_deg, dtype=np.float64)).ravel()
-    rings = _ring_arrays(prepared) if len(headings) else None
-    if rings is None:
-        return np.full(len(headings), np.nan)
-    *_, fitted = _run_screen(rings, headings, float(interval_m), float(edge_m), table)
-    return fitted
-
-
 #: The parts' rings laid end to end: ``x, y`` and eight layout arrays (:func:`_ring_arrays`).
 _Rings = tuple[
     FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray, IntArray, IntArray,
@@ -622,25 +440,6 @@ def _ring_arrays(prepared: Sequence[SweepRings]) -> _Rings | None:
     )
 
 
-def _run_screen(
-    rings: _Rings, headings: FloatArray, d: float, edge: float, table: TurnTable | None
-) -> tuple[IntArray, FloatArray, IntArray, IntArray, FloatArray]:
-    """Call :func:`_screen` on the rings at ``headings``, fitting from ``table`` if given."""
-    x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings = rings
-    cos_t, sin_t = _sweep_cosines(headings)
-    if table is None:  # empty arrays: fit nothing
-        offsets, empty = np.zeros(1, dtype=np.int64), np.zeros(0)
-        return _screen(
-            x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
-            cos_t, sin_t, d, edge, offsets, empty, empty, empty, empty, empty, empty,
-        )  # fmt: skip
-    return _screen(
-        x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
-        cos_t, sin_t, d, edge, table.offsets, table.u, table.v, table.u_lo, table.u_hi,
-        table.beyond_m, table.scalars,
-    )  # fmt: skip
-
-
 def _sweep_cosines(headings: FloatArray) -> tuple[FloatArray, FloatArray]:
     """planner.lines.to_sweep's cosines and sines of ``headings`` [deg].
 
@@ -651,31 +450,10 @@ def _sweep_cosines(headings: FloatArray) -> tuple[FloatArray, FloatArray]:
     return np.array([np.cos(t) for t in theta]), np.array([np.sin(t) for t in theta])
 
 
-def _by_python(
-    prepared: Sequence[SweepRings], headings: FloatArray, d: float, edge: float, which: IntArray
-) -> tuple[FloatArray, IntArray, IntArray]:
-    """:func:`screen_covers` of the headings ``which`` by ``cover_heading`` itself."""
-    from planner.cell_plans import cover_heading  # it imports the planner's stages
-
-    covered = np.full(len(headings), np.nan)
-    line_count = np.full(len(headings), -1, dtype=np.int64)
-    turn_count = np.full(len(headings), -1, dtype=np.int64)
-    for a in which.tolist():
-        try:
-            cover = cover_heading(prepared, float(headings[a]), d, edge)
-        except (ValueError, IndexError, ArithmeticError, shapely.errors.ShapelyError):
-            continue  # NaN, -1, -1: no cover at this heading
-        with_lines = sum(1 for c in cover.cells if c.lines.stop > c.lines.start)
-        covered[a] = cover.covered_m2
-        line_count[a] = cover.line_count
-        turn_count[a] = max(cover.line_count - with_lines, 0)
-    return covered, line_count, turn_count
-
-
 def warm_up() -> None:
-    """Compile the kernel, or load it from the disk cache, on a tiny field (one cut, 3 cells).
+    """Compile the kernels, or load them from the disk cache, on a tiny field (one cut, 3 cells).
 
-    Both ways: screening covers, and fitted covers with a small tractor's turns.
+    Both ways: screening alone, and keeping the cells to fit with a small tractor's turns.
     """
     from shapely import Polygon
 
@@ -684,6 +462,20 @@ def warm_up() -> None:
     from planner.vehicles import resolve_vehicle
 
     ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
-    screen_covers([sweep_rings(ell)], np.array([0.0, 135.0]), 4.0, 2.0)
-    table = turn_table(resolve_vehicle("small_tractor"), 4.0)
-    screen_fitted([sweep_rings(ell)], np.array([0.0, 135.0]), 4.0, 2.0, table)
+    rings = _ring_arrays([sweep_rings(ell)])
+    assert rings is not None
+    x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings = rings
+    cos_t, sin_t = _sweep_cosines(np.array([0.0, 135.0]))
+    for keep in (0, 2):
+        (
+            _, covered, _, _,
+            kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi,
+        ) = _screen(
+            x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
+            cos_t, sin_t, 4.0, 2.0, 1.0, keep,
+        )  # fmt: skip
+    t = turn_table(resolve_vehicle("small_tractor"), 4.0)
+    _fit_kept(
+        kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi,
+        covered, np.arange(2), 4.0, t.offsets, t.u, t.v, t.u_lo, t.u_hi, t.beyond_m, t.scalars,
+    )  # fmt: skip

@@ -3,9 +3,10 @@
 The compiled loops live in :mod:`planner.kernels` (the heading scorers and the helpers the
 other kernel modules build on) and in :mod:`planner.fit_kernels`,
 :mod:`planner.coverage_kernels`, :mod:`planner.cell_kernels`, :mod:`planner.order_kernels`,
-:mod:`planner.edge_kernels`, :mod:`planner.screen_kernels` and :mod:`planner.turn_kernels`.
-Each module warms its own kernels; this module, above them all, warms them all, so that
-:mod:`planner.kernels` imports none of the modules that import it.
+:mod:`planner.edge_kernels`, :mod:`planner.decomposition_kernels`,
+:mod:`planner.screen_kernels` and :mod:`planner.turn_kernels`. Each module warms its own
+kernels; this module, above them all, warms them all, so that :mod:`planner.kernels` imports
+none of the modules that import it.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 from planner import (
     cell_kernels,
     coverage_kernels,
+    decomposition_kernels,
     edge_kernels,
     fit_kernels,
     kernels,
@@ -35,5 +37,6 @@ def warm_up() -> None:
     cell_kernels.warm_up()
     order_kernels.warm_up()
     edge_kernels.warm_up()
+    decomposition_kernels.warm_up()
     screen_kernels.warm_up()
     turn_kernels.warm_up()

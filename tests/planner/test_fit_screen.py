@@ -24,10 +24,10 @@ from planner.fit_screen import (
     _under_chain_m2,
     turn_table,
 )
+from planner.heading_screen import screen_fitted
 from planner.line_ends import fit_lines, machine_area
 from planner.ordering import order_boustrophedon
 from planner.projection import field_frame
-from planner.screen_kernels import screen_fitted
 from planner.turns import TurnEnds, vehicle_turns
 from planner.vehicles import resolve_vehicle
 from tests.conftest import FIELDS_DIR
