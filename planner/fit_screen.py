@@ -52,6 +52,10 @@ _TOLERANCE_M = 1e-6
 #: Rounds of dropping lines from the sides (planner.line_ends._MAX_ROUNDS // 2).
 _SIDE_ROUNDS = 20
 
+#: A cell in the sweep frame: its lower and upper chains ``lo_u, lo_v, hi_u, hi_v`` and its
+#: extent across the lines ``u_min, u_max`` [m] (:class:`planner.coverage.Chains`).
+_Cell = tuple[FloatArray, FloatArray, FloatArray, FloatArray, float, float]
+
 
 @dataclass(frozen=True, slots=True)
 class TurnTable:
@@ -140,12 +144,7 @@ def turn_table(vehicle: Vehicle, spacing_m: float) -> TurnTable:
 
 @_jit_counted_by_caller
 def _slide(
-    lo_u: FloatArray,
-    lo_v: FloatArray,
-    hi_u: FloatArray,
-    hi_v: FloatArray,
-    u_min: float,
-    u_max: float,
+    cell: _Cell,
     u0: float,
     v0: float,
     mirror_u: float,
@@ -155,13 +154,13 @@ def _slide(
     start: int,
     stop: int,
 ) -> tuple[float, bool]:
-    """Slide one tabled turn, placed at ``(u0, v0)``, back along ``v`` until it fits the cell.
+    """Slide one tabled turn, placed at ``(u0, v0)``, back along ``v`` until it fits ``cell``.
 
-    ``lo_u, lo_v, hi_u, hi_v``: the cell's chains, ``u_min, u_max`` its sides [m];
     ``mirror_u`` 1 or -1 (towards -u); ``top``: at the upper chain (else mirrored in ``v``,
     at the lower one). Returns the slide [m] and whether the turn fits at all
     (:func:`planner.turn_slides.slide_turns`).
     """
+    lo_u, lo_v, hi_u, hi_v, u_min, u_max = cell
     delta = 0.0
     lowest = math.inf  # the least height above the far chain, before the slide
     j_lo = j_hi = -1
@@ -209,12 +208,7 @@ CACHED_SLIDES = 16
 
 @_jit_counted_by_caller
 def _placed(
-    lo_u: FloatArray,
-    lo_v: FloatArray,
-    hi_u: FloatArray,
-    hi_v: FloatArray,
-    u_min: float,
-    u_max: float,
+    cell: _Cell,
     u0: float,
     v0: float,
     mirror_u: float,
@@ -231,6 +225,7 @@ def _placed(
     extremes against the chains' slopes are computed once a cell (``cache_*``, cleared by
     the caller) and each turn then costs a few operations.
     """
+    lo_u, lo_v, hi_u, hi_v, u_min, u_max = cell
     offsets, table_u, table_v, u_lo, u_hi = table
     start, stop = offsets[shape], offsets[shape + 1]
     ua = u0 + (u_lo[shape] if mirror_u > 0.0 else -u_hi[shape])
@@ -249,10 +244,7 @@ def _placed(
         and ub <= far_u[j_far + 1]
     )
     if not straight:
-        return _slide(
-            lo_u, lo_v, hi_u, hi_v, u_min, u_max, u0, v0, mirror_u, top,
-            table_u, table_v, start, stop,
-        )  # fmt: skip
+        return _slide(cell, u0, v0, mirror_u, top, table_u, table_v, start, stop)
     slope_near = (near_v[j_near + 1] - near_v[j_near]) / (near_u[j_near + 1] - near_u[j_near])
     slope_far = (far_v[j_far + 1] - far_v[j_far]) / (far_u[j_far + 1] - far_u[j_far])
     # The turn in the frame where it lies at the top: v (and the chains' slopes) flipped.
@@ -302,12 +294,7 @@ def _free_slot(cache_keys: IntArray) -> int:
 
 @_jit_counted_by_caller
 def _turn(
-    lo_u: FloatArray,
-    lo_v: FloatArray,
-    hi_u: FloatArray,
-    hi_v: FloatArray,
-    u_min: float,
-    u_max: float,
+    cell: _Cell,
     u_from: float,
     v_from: float,
     u_to: float,
@@ -333,10 +320,7 @@ def _turn(
     mirror_u = 1.0 if u_to >= u_from else -1.0
     offset = v_to - v_from if top else v_from - v_to
     s, v0 = _tabled(offset, v_from, top, c, per_class, step, reach)
-    delta, fits = _placed(
-        lo_u, lo_v, hi_u, hi_v, u_min, u_max, u_from, v0, mirror_u, top, s, table,
-        cache_keys, cache_values,
-    )  # fmt: skip
+    delta, fits = _placed(cell, u_from, v0, mirror_u, top, s, table, cache_keys, cache_values)
     if not fits:
         delta = 0.0 if delta == math.inf else delta
     pull_end = pull_start = delta
@@ -351,10 +335,7 @@ def _turn(
                 offset + (back_m if side == 0 else -back_m),
                 v_from + inward * back_end, top, c, per_class, step, reach,
             )  # fmt: skip
-            d2, f2 = _placed(
-                lo_u, lo_v, hi_u, hi_v, u_min, u_max, u_from, v0, mirror_u, top, s2, table,
-                cache_keys, cache_values,
-            )  # fmt: skip
+            d2, f2 = _placed(cell, u_from, v0, mirror_u, top, s2, table, cache_keys, cache_values)
             loss = 2.0 * d2 + back_m if f2 else math.inf
             if loss < best_loss:
                 best_loss = loss
@@ -420,6 +401,7 @@ def _fit_cell(
     hi_v = chains[2 + 2 * n_lo + n_hi :]
     u_min = hi_u[0] if hi_u[0] < lo_u[0] else lo_u[0]  # Chains.u_min and u_max
     u_max = hi_u[-1] if hi_u[-1] > lo_u[-1] else lo_u[-1]
+    cell = (lo_u, lo_v, hi_u, hi_v, u_min, u_max)
     start, end = work[2], work[3]
     pull_end, pull_start, a, b = work[4], work[5], work[6], work[7]
     up, fits, drop = flags[0], flags[1], flags[2]
@@ -431,7 +413,7 @@ def _fit_cell(
     cache_keys[:] = -1
     for t in range(n - 1):
         pull_end[t], pull_start[t], fits[t] = _turn(
-            lo_u, lo_v, hi_u, hi_v, u_min, u_max, u[t], end[t], u[t + 1], start[t + 1], up[t],
+            cell, u[t], end[t], u[t + 1], start[t + 1], up[t],
             table, beyond_m, scalars, cache_keys, cache_values,
         )  # fmt: skip
     first, last = 0, n - 1
@@ -495,14 +477,13 @@ def _fit_cell(
             x1 = min(x1, u[n - 1] - d / 2.0)
         if overlap and i == n - 1:
             x0 = max(x0, u[n - 2] + d / 2.0)
-        loss_m2 += _span_loss_m2(x0, x1, v_lo[i], v_hi[i], start[i], end[i], lo_u, lo_v, hi_u, hi_v)
+        loss_m2 += _span_loss_m2(x0, x1, v_lo[i], v_hi[i], start[i], end[i], cell)
     if overlap:
         x0 = max(u[n - 1] - d / 2.0, u_min)
         x1 = min(u[n - 2] + d / 2.0, u_max)
         loss_m2 += _span_loss_m2(
             x0, x1, min(v_lo[n - 2], v_lo[n - 1]), max(v_hi[n - 2], v_hi[n - 1]),
-            min(start[n - 2], start[n - 1]), max(end[n - 2], end[n - 1]),
-            lo_u, lo_v, hi_u, hi_v,
+            min(start[n - 2], start[n - 1]), max(end[n - 2], end[n - 1]), cell,
         )  # fmt: skip
     return loss_m2
 
@@ -510,15 +491,16 @@ def _fit_cell(
 @_jit_counted_by_caller
 def _span_loss_m2(
     x0: float, x1: float, v_lo: float, v_hi: float, fitted_lo: float, fitted_hi: float,
-    lo_u: FloatArray, lo_v: FloatArray, hi_u: FloatArray, hi_v: FloatArray,
+    cell: _Cell,
 ) -> float:  # fmt: skip
-    """Area of the cell a footprint over ``x0..x1`` loses from ``v_lo..v_hi`` to its fitted span.
+    """Area of ``cell`` a footprint over ``x0..x1`` loses from ``v_lo..v_hi`` to its fitted span.
 
     An empty fitted span (``fitted_lo > fitted_hi``) loses all it covered; otherwise the two
     ends' losses lie apart, within what it covered.
     """
     if fitted_lo > fitted_hi:
-        return _line_m2(x0, x1, v_lo, v_hi, lo_u, lo_v, hi_u, hi_v)
+        return _line_m2(x0, x1, v_lo, v_hi, cell)
+    lo_u, lo_v, hi_u, hi_v, _, _ = cell
     top = max(v_hi - fitted_hi, 0.0)
     bottom = max(fitted_lo - v_lo, 0.0)
     lost_m2 = _under_chain_m2(hi_u, hi_v, x0, x1, v_hi - top, top, 1.0)
@@ -526,11 +508,9 @@ def _span_loss_m2(
 
 
 @_jit_counted_by_caller
-def _line_m2(
-    x0: float, x1: float, v_lo: float, v_hi: float,
-    lo_u: FloatArray, lo_v: FloatArray, hi_u: FloatArray, hi_v: FloatArray,
-) -> float:  # fmt: skip
-    """Area of the cell a line's footprint (strip ``x0..x1``, flat ends) covers [m²]."""
+def _line_m2(x0: float, x1: float, v_lo: float, v_hi: float, cell: _Cell) -> float:
+    """Area of ``cell`` a line's footprint (strip ``x0..x1``, flat ends) covers [m²]."""
+    lo_u, lo_v, hi_u, hi_v, _, _ = cell
     length = v_hi - v_lo
     if length <= 0.0 or x1 <= x0:
         return 0.0
