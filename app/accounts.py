@@ -130,15 +130,64 @@ def user_count(session: Session) -> int:
 def _hash_in_advance(password: str) -> str | AccountError:
     """Return ``password``'s Argon2 hash, or the error saying why it cannot be used.
 
-    Called before the write transaction begins, so that no Argon2 (tens of ms of CPU) runs
-    while SQLite's write lock is held and every other writer (a tractor's fixes) waits. Whether
-    the user is new, and so whether the hash or the error matters, is known only inside that
-    transaction: an existing user keeps their password, whatever was given.
+    Called with no transaction open, so that no Argon2 (tens of ms of CPU) runs while SQLite's
+    write lock is held and every other writer (a tractor's fixes) waits. The error matters only
+    if the user turns out to be new: an existing user keeps their password, whatever was given.
     """
     try:
         return hash_password(check_password(password))
     except AccountError as exc:
         return exc
+
+
+def _user_named(session: Session, name: str) -> User | None:
+    return session.scalar(select(User).where(User.username == name))
+
+
+def _begin_user_write(
+    session: Session, name: str, password: str | None
+) -> tuple[User | None, str | AccountError | None]:
+    """Begin the write transaction (the caller commits) that adds user ``name`` or gives a role.
+
+    Whether the user exists is read first, without the write lock; ``password`` is hashed, still
+    without it, only if not: an existing user keeps their password, so costs no Argon2.
+
+    Returns
+    -------
+    user : User or None
+        The user, read in the write transaction; None if there is none.
+    password_hash : str or AccountError or None
+        ``password``'s hash, or the error saying why it cannot be used
+        (:func:`_hash_in_advance`); None if no ``password`` was given, or if the user existed
+        when first read (``user`` is then not None).
+    """
+    exists = session.scalar(select(User.id).where(User.username == name)) is not None
+    end_reads(session)
+    password_hash = None if password is None or exists else _hash_in_advance(password)
+    begin_write(session)
+    user = _user_named(session, name)
+    if user is None and password is not None and password_hash is None:
+        # Deleted since the read. Hashing now would hold SQLite's write lock for ~0.1 s, so the
+        # transaction (nothing written yet) ends, the hash is made, and the write starts again
+        # once. That second pass has the hash whatever it finds, so it cannot come back here;
+        # an AccountError instead would refuse a valid request because of someone else's delete.
+        end_reads(session)
+        password_hash = _hash_in_advance(password)
+        begin_write(session)
+        user = _user_named(session, name)
+    return user, password_hash
+
+
+def _new_user(session: Session, name: str, password_hash: str | AccountError | None) -> User:
+    """Add user ``name`` (flushed); raise AccountError if the password is missing or bad."""
+    if password_hash is None:
+        raise AccountError(f"username: no user called {name!r}; give a password to make one")
+    if isinstance(password_hash, AccountError):
+        raise password_hash
+    user = User(username=name, password_hash=password_hash)
+    session.add(user)
+    session.flush()
+    return user
 
 
 def create_user(
@@ -152,8 +201,8 @@ def create_user(
     """Add a user with a role in ``organisation`` (made if missing) and commit.
 
     A user that exists already keeps its password and gets the role in the organisation. The
-    password is hashed first; the reads and writes then share one write transaction
-    (:func:`app.db.begin_write`).
+    password is hashed only for a new user, before the write transaction that shares the reads
+    and writes (:func:`_begin_user_write`).
 
     Raises
     ------
@@ -162,27 +211,25 @@ def create_user(
     """
     name = check_username(username)
     check_role(role)
-    password_hash = _hash_in_advance(password)
-    begin_write(session)
-    return _store_user(session, name, password_hash, organisation=organisation, role=role)
+    user, password_hash = _begin_user_write(session, name, password)
+    return _store_user(session, name, user, password_hash, organisation=organisation, role=role)
 
 
 def _store_user(
     session: Session,
     name: str,
-    password_hash: str | AccountError,
+    user: User | None,
+    password_hash: str | AccountError | None,
     *,
     organisation: str,
     role: str,
 ) -> User:
-    """Do :func:`create_user`'s reads and writes in the caller's write transaction; commit."""
-    user = session.scalar(select(User).where(User.username == name))
+    """Do :func:`create_user`'s writes in the caller's write transaction; commit.
+
+    ``user`` is the user called ``name`` as read in that transaction (None: add it).
+    """
     if user is None:
-        if isinstance(password_hash, AccountError):
-            raise password_hash
-        user = User(username=name, password_hash=password_hash)
-        session.add(user)
-        session.flush()
+        user = _new_user(session, name, password_hash)
     org = get_or_create_organisation(session, organisation)
     membership = session.scalar(
         select(Membership).where(
@@ -460,7 +507,9 @@ def sign_up_first(session: Session, username: str, password: str, organisation: 
     begin_write(session)
     serialise_writes(session, FIRST_ACCOUNT_LOCK_KEY)
     _refuse_a_second_first_account(session)
-    return _store_user(session, name, password_hash, organisation=organisation, role="owner")
+    # No user at all (checked again above, under the lock): the hash made before it is needed.
+    user = _user_named(session, name)
+    return _store_user(session, name, user, password_hash, organisation=organisation, role="owner")
 
 
 # --- Members (owners manage them) -------------------------------------------------------------
@@ -507,6 +556,8 @@ def add_member(
 ) -> tuple[User, Membership]:
     """Give a user (made if ``password`` is given and none exists) a role in the organisation.
 
+    The password is hashed only for a new user, before the write lock (:func:`create_user`).
+
     Raises
     ------
     AccountError
@@ -514,17 +565,9 @@ def add_member(
     """
     check_role(role)
     name = check_username(username)
-    password_hash = None if password is None else _hash_in_advance(password)
-    begin_write(session)
-    user = session.scalar(select(User).where(User.username == name))
+    user, password_hash = _begin_user_write(session, name, password)
     if user is None:
-        if password_hash is None:
-            raise AccountError(f"username: no user called {name!r}; give a password to make one")
-        if isinstance(password_hash, AccountError):
-            raise password_hash
-        user = User(username=name, password_hash=password_hash)
-        session.add(user)
-        session.flush()
+        user = _new_user(session, name, password_hash)
     member = session.scalar(
         select(Membership).where(
             Membership.organisation_id == organisation_id, Membership.user_id == user.id

@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from typing import Any
 
 import pytest
 from fastapi import FastAPI
-from sqlalchemy import func, select
+from sqlalchemy import delete, func, select
 from sqlalchemy.orm import Session
 from starlette.testclient import TestClient
 
 from app import accounts
 from app.auth_models import LoginAttempt, Membership, Organisation, User
+from app.errors import AccountError
 from app.models import Plan
 from tests.app.conftest import TEST_PASSWORD, ClientFactory, Workspace, add_user
 
@@ -368,3 +370,109 @@ def test_member_ids_beyond_32_bits_are_404(client: TestClient):
     assert client.patch(f"/api/members/{huge}", json={"role": "viewer"}).status_code == 404
     assert client.delete(f"/api/members/{huge}").status_code == 404
     assert client.delete(f"/api/tokens/{huge}").status_code == 404
+
+
+@pytest.fixture
+def hashes(session: Session, monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The passwords :func:`app.accounts.hash_password` is called with, from now on.
+
+    A spy, not a stand-in: the real hash is made. Each call also checks that no transaction
+    of ``session`` is open, so that Argon2 never runs under SQLite's write lock.
+    """
+    calls: list[str] = []
+    real = accounts.hash_password
+
+    def spy(password: str) -> str:
+        assert not session.in_transaction(), "Argon2 ran inside a transaction"
+        calls.append(password)
+        return real(password)
+
+    monkeypatch.setattr(accounts, "hash_password", spy)
+    return calls
+
+
+def test_an_existing_user_added_with_a_password_costs_no_argon2_and_keeps_theirs(
+    session: Session, workspace: Workspace, hashes: list[str]
+):
+    planner = workspace.users["planner"]
+    user, member = accounts.add_member(
+        session, workspace.other_organisation_id, "planner", "viewer", "a new long password"
+    )
+    again = accounts.create_user(session, "planner", "another long password", organisation="coop")
+    assert user.id == again.id == planner.id and member.role == "viewer"
+    assert hashes == []
+    signed_in = accounts.authenticate_password(session, "planner", TEST_PASSWORD, "192.0.2.1")
+    assert signed_in.id == planner.id
+    for new in ("a new long password", "another long password"):
+        assert not accounts.verify_password(again.password_hash, new)
+    # A new user's password is hashed, once.
+    accounts.add_member(session, workspace.organisation_id, "newcomer", "viewer", "long enough")
+    assert hashes == ["long enough"]
+
+
+def test_a_bad_password_refuses_a_new_user_and_is_ignored_for_an_existing_one(
+    session: Session, workspace: Workspace, hashes: list[str]
+):
+    with pytest.raises(AccountError) as expected:
+        accounts.check_password("short")
+    for make in (
+        lambda: accounts.create_user(session, "newcomer", "short", organisation="coop"),
+        lambda: accounts.add_member(
+            session, workspace.organisation_id, "newcomer", "viewer", "short"
+        ),
+    ):
+        with pytest.raises(AccountError) as refused:
+            make()
+        assert str(refused.value) == str(expected.value)
+        session.rollback()
+        assert session.scalar(select(User).where(User.username == "newcomer")) is None
+    _user, member = accounts.add_member(
+        session, workspace.other_organisation_id, "planner", "viewer", "short"
+    )
+    assert member.role == "viewer"
+    kept = accounts.create_user(session, "planner", "short", organisation="coop", role="viewer")
+    assert accounts.verify_password(kept.password_hash, TEST_PASSWORD)
+    assert hashes == []
+
+
+def _between_read_and_write(
+    monkeypatch: pytest.MonkeyPatch, change: Callable[[Session], None]
+) -> None:
+    """Make ``change`` (committed) happen after the user is first read, before the write."""
+    real = accounts.begin_write
+    pending = [change]
+
+    def begin_write(session: Session) -> None:
+        if pending:
+            pending.pop()(session)
+            session.commit()
+        real(session)
+
+    monkeypatch.setattr(accounts, "begin_write", begin_write)
+
+
+def test_a_user_deleted_between_the_read_and_the_write_is_made_anew(
+    session: Session, workspace: Workspace, hashes: list[str], monkeypatch: pytest.MonkeyPatch
+):
+    # Read as existing (no hash), gone in the write transaction: the password is hashed then,
+    # outside it (the spy checks), and the user is made with it.
+    _between_read_and_write(
+        monkeypatch, lambda s: s.execute(delete(User).where(User.username == "planner"))
+    )
+    user, member = accounts.add_member(
+        session, workspace.other_organisation_id, "planner", "viewer", "a new long password"
+    )
+    assert hashes == ["a new long password"] and member.role == "viewer"
+    assert user.id != workspace.users["planner"].id
+    assert accounts.verify_password(user.password_hash, "a new long password")
+
+
+def test_a_user_made_between_the_read_and_the_write_keeps_their_password(
+    session: Session, workspace: Workspace, hashes: list[str], monkeypatch: pytest.MonkeyPatch
+):
+    _between_read_and_write(
+        monkeypatch, lambda s: add_user(s, "twin", {workspace.organisation_id: "planner"})
+    )
+    user = accounts.create_user(session, "twin", "a new long password", organisation="coop")
+    assert hashes == ["a new long password"]  # made before the write, then not needed
+    assert accounts.verify_password(user.password_hash, TEST_PASSWORD)
