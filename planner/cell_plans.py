@@ -25,6 +25,9 @@ from planner.types import Objective
 FloatArray = npt.NDArray[np.float64]
 #: ``move_m(exits, entries)``: lengths [m] of the moves from every exit to every entry.
 MoveCost = Callable[[FloatArray, FloatArray], FloatArray]
+#: What an excluded variant adds to its cell's length [m]: more than any plan is long (a
+#: 2,000 ha field at 1 m is 20,000 km of lines), so one is driven only if no other can be.
+EXCLUDED_M = 1e12
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,15 +104,24 @@ def order_heading(
     cover: CellCover,
     start_xy: tuple[float, float] | None,
     finish_xy: tuple[float, float] | None,
+    *,
+    excluded: npt.NDArray[np.bool_] | None = None,
 ) -> CellPlan:
-    """Order :func:`cover_heading`'s cells (their variants, straight moves): its cheap plan."""
+    """Order :func:`cover_heading`'s cells (their variants, straight moves): its cheap plan.
+
+    ``excluded`` (cells, 4): variants not to drive, unless a cell has no other
+    (:func:`planner.parity_kernels.parity_choice`); they cost :data:`EXCLUDED_M` more.
+    """
     scan, heading = cover.scan, cover.heading_deg
     aggregates = aggregate_scan(scan)
     lengths = combine_variants(aggregates, None, None)
     eu, ev, xu, xv = variant_ends(scan, aggregates)
     entry = np.stack(from_sweep(eu, ev, heading), axis=2)
     exit_ = np.stack(from_sweep(xu, xv, heading), axis=2)
-    variants = CellVariants(entry, exit_, lengths.turns)
+    inner_m = lengths.turns
+    if excluded is not None and excluded.any():
+        inner_m = np.where(excluded, inner_m + EXCLUDED_M, inner_m)
+    variants = CellVariants(entry, exit_, inner_m)
     working = float(lengths.working.sum())
     order = order_cells(variants, start_xy, finish_xy, improve=False)
     length = working + order_length(variants, order, start_xy, finish_xy, None)

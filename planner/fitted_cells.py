@@ -27,11 +27,13 @@ from planner.fit_screen import TurnTable
 from planner.footprints import cell_lines, cells_and_band_m2, lines_in_cells_m2
 from planner.line_ends import FittedLines
 from planner.lines import from_sweep
+from planner.parity_kernels import parity_choice, parity_losses_m2
 from planner.turn_reach import end_reach_m
 from planner.turns import TurnEnds, vehicle_turns
 from planner.types import Objective, Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
 
 #: Path lengths closer than this count as equal [m].
 _TIE_M = 1e-6
@@ -338,6 +340,8 @@ def cover_picks(
     edge_m: float,
     vehicle: Vehicle,
     turn_table: TurnTable | None = None,
+    *,
+    parity_slack_m2: float = math.inf,
 ) -> list[int]:
     """Pick the headings to fit from the decomposed estimate at every heading (R5).
 
@@ -365,6 +369,9 @@ def cover_picks(
         The vehicle's turns (:func:`planner.fit_screen.turn_table`): given, the
         :data:`SCREENED_FITS` best by the estimate are ranked again on their cells fitted
         from it (the estimate misjudges turns with a radius by a few percentage points).
+    parity_slack_m2 : float, optional
+        What the cells' order gives up for length, as :func:`excluded_variants` [m²]
+        (:func:`planner.parity_kernels.cell_loss_m2`); by default it chooses for length only.
 
     Returns
     -------
@@ -407,9 +414,31 @@ def cover_picks(
     if turn_table is not None:
         screened = order[:SCREENED_FITS]
         screened = screened[np.isfinite(estimate[screened])]  # (the refused are last)
-        fitted_m2 = fit_screened(screen, screened, turn_table)
+        fitted_m2 = fit_screened(screen, screened, turn_table, parity_slack_m2=parity_slack_m2)
         rank = np.round(np.where(np.isfinite(fitted_m2), fitted_m2, -np.inf), 6)
         order = np.concatenate(
             [screened[np.lexsort((headings_deg[screened], -rank))], order[len(screened) :]]
         )
     return [int(a) for a in order[:COVER_FITS] if np.isfinite(estimate[a])]
+
+
+def excluded_variants(
+    cover: CellCover, table: TurnTable, interval_m: float, slack_m2: float
+) -> BoolArray:
+    """Return the variants of ``cover``'s cells that would buy length with coverage (R5).
+
+    Each cell is screened fitted both ways round
+    (:func:`planner.parity_kernels.parity_losses_m2`); the variants of a way that loses more
+    than ``slack_m2`` beyond the other are excluded from the cell order
+    (:func:`planner.cell_plans.order_heading`).
+
+    Returns
+    -------
+    ndarray of bool, shape (cells, 4)
+    """
+    scan = cover.scan
+    losses = parity_losses_m2(
+        [c.chains for c in cover.cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi,
+        interval_m, table,
+    )  # fmt: skip
+    return parity_choice(losses, np.diff(scan.offsets), slack_m2)

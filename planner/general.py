@@ -31,6 +31,7 @@ from planner.fitted_cells import (
     FittedCells,
     choose_cells,
     cover_picks,
+    excluded_variants,
     fit_candidate,
 )
 from planner.fitted_choice import edge_headings
@@ -40,6 +41,7 @@ from planner.headland_route import add_headland, first_ring_point, ring_order
 from planner.headlands import headland_ring_sets, inner_parts
 from planner.line_ends import FittedLines, machine_area
 from planner.lines import from_sweep
+from planner.parity_kernels import PARITY_SLACK_SHARE
 from planner.route_builder import RouteBuilder, add_fitted_lines, densify
 from planner.routing import FieldRouter
 from planner.turns import turning_radius_m
@@ -227,16 +229,21 @@ def plan_general(
         covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
         planned = len(ranked)
         slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
+        # With a radius, fitted coverage depends on the heading and on which ends each cell
+        # turns at by more than the rule's slack: both are screened, turn by turn, from a
+        # table of the vehicle's turns (not with passes: turns swing over the headland).
+        table = None
+        if machine.min_turn_radius_m > 0.0 and not headland_passes and pattern != "snake":
+            table = turn_table(machine, d)
+        parity_slack_m2 = PARITY_SLACK_SHARE * float(field_local.area)
         must_fit: list[int] = []
         if len(ranked) > 1:
             # R5: the headings that the decomposed estimate of fitted coverage, at every
-            # heading, ranks best-covering are fitted too.
-            # With a radius the estimate errs by more than the rule's slack: its best are
-            # screened fitted, turn by turn (not with passes: turns swing over the headland).
-            table = None
-            if machine.min_turn_radius_m > 0.0 and not headland_passes and pattern != "snake":
-                table = turn_table(machine, d)
-            picks = cover_picks(prepared, headings, d, edge, machine, table)
+            # heading, ranks best-covering are fitted too (with a radius, its best are
+            # screened fitted).
+            picks = cover_picks(
+                prepared, headings, d, edge, machine, table, parity_slack_m2=parity_slack_m2
+            )
             extra = [a for a in picks if a not in ranked]
             covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in extra]
             ranked += extra
@@ -246,7 +253,12 @@ def plan_general(
         def cheap(i: int) -> CellPlan:
             # Ordered only when the rule asks for its length (most headings are).
             if i not in orders:
-                plan = order_heading(covers[i], start_xy, after_lines)
+                # R5 within the heading: no cell turns at the ends that cost it clearly
+                # more cover, to save length.
+                excluded = None
+                if table is not None:
+                    excluded = excluded_variants(covers[i], table, d, parity_slack_m2)
+                plan = order_heading(covers[i], start_xy, after_lines, excluded=excluded)
                 orders[i] = reach_headland(plan, d) if rings else plan
             return orders[i]
 

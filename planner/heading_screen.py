@@ -20,6 +20,7 @@ decomposed once. ``tests/planner/test_heading_screen.py`` holds the figures equa
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -167,7 +168,13 @@ def screen_cells(
     return ScreenedCovers(covered, line_count, turn_count, d, kept if keep > 0 else None)
 
 
-def fit_screened(screened: ScreenedCovers, which: npt.ArrayLike, table: TurnTable) -> FloatArray:
+def fit_screened(
+    screened: ScreenedCovers,
+    which: npt.ArrayLike,
+    table: TurnTable,
+    *,
+    parity_slack_m2: float = math.inf,
+) -> FloatArray:
     """Estimate the coverage of the headings ``which`` once fitted, from their kept cells [m²].
 
     :func:`screen_fitted` of ``screened``'s headings ``which`` (indices), to the last bit, at
@@ -179,7 +186,7 @@ def fit_screened(screened: ScreenedCovers, which: npt.ArrayLike, table: TurnTabl
     t = table
     return _fit_kept(
         *screened.kept, screened.covered_m2, at, screened.interval_m,
-        t.offsets, t.u, t.v, t.u_lo, t.u_hi, t.beyond_m, t.scalars,
+        t.offsets, t.u, t.v, t.u_lo, t.u_hi, t.beyond_m, t.scalars, float(parity_slack_m2),
     )  # fmt: skip
 
 
@@ -189,12 +196,16 @@ def screen_fitted(
     interval_m: float,
     edge_m: float,
     table: TurnTable,
+    *,
+    parity_slack_m2: float = math.inf,
 ) -> FloatArray:
     """Estimate the coverage of each heading's cells once fitted for the vehicle [m²].
 
     The cells and lines of :func:`screen_covers`, each cell's lines fitted from ``table``
-    (:mod:`planner.fit_screen`); NaN at a heading it cannot estimate (a turn beyond the
-    table, a boundary the compiled decomposition leaves to shapely).
+    (:mod:`planner.fit_screen`) both ways round and counted as the plan drives it
+    (:func:`planner.parity_kernels.cell_loss_m2` with ``parity_slack_m2``; by default the two
+    ways averaged); NaN at a heading it cannot estimate (a turn beyond the table, a boundary
+    the compiled decomposition leaves to shapely).
 
     Examples
     --------
@@ -220,7 +231,7 @@ def screen_fitted(
         rings, headings, d, float(edge_m), 0.0, len(headings)
     )
     screened = ScreenedCovers(covered, line_count, turn_count, d, kept)
-    return fit_screened(screened, np.arange(len(headings)), table)
+    return fit_screened(screened, np.arange(len(headings)), table, parity_slack_m2=parity_slack_m2)
 
 
 def _run_screen(

@@ -30,6 +30,7 @@ from planner.decomposition import SweepRings
 from planner.decomposition_kernels import _part_cells
 from planner.fit_screen import CACHED_SLIDES, _fit_cell
 from planner.kernel_helpers import _clip, _jit, _pairwise_sum, _right
+from planner.parity_kernels import cell_loss_m2
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -341,10 +342,12 @@ def _fit_kept(
     table_u_hi: FloatArray,
     table_beyond_m: FloatArray,
     table_scalars: FloatArray,
+    parity_slack_m2: float,
 ) -> FloatArray:
     """Estimate the fitted coverage of the headings ``which`` from their kept cells [m²].
 
-    NaN at a heading whose cells were not kept.
+    NaN at a heading whose cells were not kept. ``parity_slack_m2``: as
+    :func:`planner.parity_kernels.cell_loss_m2` takes it.
     """
     fitted = np.full(len(which), np.nan)
     table = (table_offsets, table_u, table_v, table_u_lo, table_u_hi)
@@ -357,7 +360,7 @@ def _fit_kept(
         fitted[i] = covered[which[i]] - _fitted_m2(
             kept_chains[chain_at[k] : chain_at[k + 1]], kept_chains_at[c0:c1],
             kept_offsets[c0:c1], kept_u[k0:k1], kept_v_lo[k0:k1], kept_v_hi[k0:k1], d,
-            table, table_beyond_m, table_scalars,
+            table, table_beyond_m, table_scalars, parity_slack_m2,
         )  # fmt: skip
     return fitted
 
@@ -374,10 +377,12 @@ def _fitted_m2(
     table: tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray],
     table_beyond_m: FloatArray,
     table_scalars: FloatArray,
+    parity_slack_m2: float,
 ) -> float:
     """Return what fitting takes off one heading's cover [m²].
 
-    Each cell is fitted both ways (:func:`planner.fit_screen._fit_cell`) and the two averaged.
+    Each cell is fitted both ways (:func:`planner.fit_screen._fit_cell`) and counted as the
+    plan will drive it (:func:`planner.parity_kernels.cell_loss_m2`).
     """
     work = np.empty((8, len(line_u)))
     flags = np.empty((3, len(line_u)), dtype=np.bool_)
@@ -389,25 +394,17 @@ def _fitted_m2(
         if k1 - k0 < 2:
             continue  # one line: no turn
         chains = all_chains[chains_at[c] : chains_at[c + 1]]
-        for first_up in (True, False):
-            total += (
-                _fit_cell(
-                    chains,
-                    line_u[k0:k1],
-                    v_lo[k0:k1],
-                    v_hi[k0:k1],
-                    first_up,
-                    table,
-                    table_beyond_m,
-                    table_scalars,
-                    cache_keys,
-                    cache_values,
-                    work[:, k0:k1],
-                    flags[:, k0:k1],
-                    d,
-                )  # fmt: skip
-                / 2.0
-            )
+        up_m2 = _fit_cell(
+            chains, line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], True,
+            table, table_beyond_m, table_scalars, cache_keys, cache_values,
+            work[:, k0:k1], flags[:, k0:k1], d,
+        )  # fmt: skip
+        down_m2 = _fit_cell(
+            chains, line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], False,
+            table, table_beyond_m, table_scalars, cache_keys, cache_values,
+            work[:, k0:k1], flags[:, k0:k1], d,
+        )  # fmt: skip
+        total += cell_loss_m2(up_m2, down_m2, parity_slack_m2)
     return total
 
 
@@ -478,4 +475,5 @@ def warm_up() -> None:
     _fit_kept(
         kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi,
         covered, np.arange(2), 4.0, t.offsets, t.u, t.v, t.u_lo, t.u_hi, t.beyond_m, t.scalars,
+        100.0,
     )  # fmt: skip

@@ -4,9 +4,9 @@ The compiled loops live in :mod:`planner.kernels` (the heading scorers and the h
 other kernel modules build on) and in :mod:`planner.fit_kernels`,
 :mod:`planner.coverage_kernels`, :mod:`planner.cell_kernels`, :mod:`planner.order_kernels`,
 :mod:`planner.edge_kernels`, :mod:`planner.decomposition_kernels`,
-:mod:`planner.screen_kernels` and :mod:`planner.turn_kernels`. Each module warms its own
-kernels; this module, above them all, warms them all, so that :mod:`planner.kernels` imports
-none of the modules that import it.
+:mod:`planner.screen_kernels`, :mod:`planner.parity_kernels` and :mod:`planner.turn_kernels`.
+Each module warms its own kernels; this module, above them all, warms them all, so that
+:mod:`planner.kernels` imports none of the modules that import it.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from planner import (
     fit_kernels,
     kernels,
     order_kernels,
+    parity_kernels,
     screen_kernels,
     turn_kernels,
 )
@@ -39,4 +40,5 @@ def warm_up() -> None:
     edge_kernels.warm_up()
     decomposition_kernels.warm_up()
     screen_kernels.warm_up()
+    parity_kernels.warm_up()
     turn_kernels.warm_up()
