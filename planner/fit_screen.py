@@ -15,9 +15,10 @@ a cell is looked up, placed on its line end and slid back until it lies inside t
 from the sides as :func:`planner.line_ends.fit_lines` drops them. The figure is an estimate,
 not the fit: the end offset is rounded to :data:`TABLE_STEP_M`, spacings to a
 :data:`SPACING_CLASSES`-th of the interval, a curve's chords are not checked against the
-chain's vertices between its points, lines left after the sides' rounds stay, and each cell
-is fitted with its first line driven up and down and the two averaged (the cell order picks
-one later, for length; on one real field the two differ by 22 pp of its area).
+chain's vertices between its points, and lines left after the sides' rounds stay. Each cell
+is fitted with its first line driven up and with it down, and counted the way the plan will
+drive it (:mod:`planner.parity_kernels`: on one real field the two differ by 22 pp of its
+area).
 The planner fits the headings it ranks best for real (:func:`planner.fitted_cells.cover_picks`).
 """
 
