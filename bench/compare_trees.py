@@ -64,6 +64,8 @@ def main() -> None:
     theirs = json.loads(child.stdout)
     ours = figures(vehicles)
     worse = 0
+    gains_pp: dict[str, list[float]] = {}
+    longer_pct: dict[str, list[float]] = {}
     print(
         f"{'vehicle field':40s} {'other %':>9s} {'this %':>9s} {'d pp':>7s} "
         f"{'other m':>9s} {'this m':>9s} {'d %':>7s} {'other°':>8s} {'this°':>8s}"
@@ -76,11 +78,22 @@ def main() -> None:
         d_pp = (c1 - c0) * 100.0
         flag = "  << R5" if d_pp < -0.2 else ""
         worse += d_pp < -0.2
+        vehicle = key.split(" ", 1)[0]
+        gains_pp.setdefault(vehicle, []).append(d_pp)
+        longer_pct.setdefault(vehicle, []).append((p1 / p0 - 1) * 100.0)
         print(
             f"{key:40s} {c0 * 100:9.4f} {c1 * 100:9.4f} {d_pp:+7.3f} {p0:9.1f} {p1:9.1f} "
             f"{(p1 / p0 - 1) * 100:+7.2f} {h0:8.2f} {h1:8.2f}{flag}"
         )
     print(f"{len(ours)} plans; this tree more than 0.2 pp below the other on {worse}")
+    for vehicle, gains in gains_pp.items():
+        longer = longer_pct[vehicle]
+        print(
+            f"{vehicle}: coverage {sum(gains) / len(gains):+.3f} pp on average "
+            f"(more than 0.2 pp higher on {sum(g > 0.2 for g in gains)}, lower on "
+            f"{sum(g < -0.2 for g in gains)}; from {min(gains):+.2f} to {max(gains):+.2f} pp); "
+            f"path {sum(longer) / len(longer):+.2f} % on average"
+        )
 
 
 if __name__ == "__main__":
