@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import shapely
 from shapely import Polygon
 
 from planner.angles import (
@@ -28,16 +27,15 @@ from planner.angles import (
     REFINE_STEP_DEG,
     HeadingChoice,
     LengthScorer,
-    candidate_headings,
     objective_key,
     tied_lengths,
 )
 from planner.convex_fits import convex_machine_area, fit_headings
+from planner.edge_estimates import edge_headings, given_up_by_edges
 from planner.errors import InvalidParameterError
-from planner.heading_coverage import convex_coverage
 from planner.line_ends import FittedLines
-from planner.lines import to_sweep
-from planner.turn_reach import edge_loss_m2, end_reach_m
+from planner.parity_kernels import PARITY_SLACK_SHARE
+from planner.turn_reach import end_reach_m
 from planner.types import Objective, Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -91,6 +89,9 @@ def choose_convex(
 ) -> FittedChoice:
     """Fit the search's choice and its alternatives; keep the choice if it keeps the rule.
 
+    The heading is chosen as :func:`_choose_heading` says; then, with a turning radius, the
+    way round the lines are driven too (:func:`_cover_first_way`).
+
     Parameters
     ----------
     field_local : Polygon
@@ -112,9 +113,6 @@ def choose_convex(
     Returns
     -------
     FittedChoice
-        The search's choice if its fitted coverage is within 0.2 pp of the best fitted
-        alternative's and no shorter fitted heading keeps the rule, else the fitted heading
-        within the rule that the objective prefers.
 
     Examples
     --------
@@ -134,6 +132,99 @@ def choose_convex(
     ...     lengths_of=lambda h: score_headings(ring, h, 4.0, None, None))
     >>> picked.chosen.heading_deg, picked.coverage_given_up_pp <= 0.2
     (90.0, True)
+    """
+    picked = _choose_heading(
+        field_local,
+        choice,
+        interval_m=interval_m,
+        implement_width_m=implement_width_m,
+        vehicle=vehicle,
+        pattern=pattern,
+        objective=objective,
+        start_xy=start_xy,
+        finish_xy=finish_xy,
+        lengths_of=lengths_of,
+        fixed_heading=fixed_heading,
+    )
+    if vehicle.min_turn_radius_m <= 0.0 or pattern == "snake":
+        return picked
+    return _cover_first_way(
+        picked,
+        field_local,
+        interval_m=interval_m,
+        implement_width_m=implement_width_m,
+        vehicle=vehicle,
+        pattern=pattern,
+        objective=objective,
+        start_xy=start_xy,
+        finish_xy=finish_xy,
+    )
+
+
+def _cover_first_way(
+    picked: FittedChoice,
+    field_local: Polygon,
+    *,
+    interval_m: float,
+    implement_width_m: float,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    objective: Objective,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> FittedChoice:
+    """R5 within the heading: drive the lines the way round that covers clearly more.
+
+    The heading's lines are chosen for length in one of four variants; two turn at one end
+    of the first line and two at the other, and with a turning radius that can cost the
+    field a line (:mod:`planner.parity_kernels`). All four are fitted; the chosen one is kept
+    unless another covers more than :data:`planner.parity_kernels.PARITY_SLACK_SHARE` of the
+    field beyond it, and then the objective's best of those within that of the best is.
+    """
+    heading = picked.chosen.heading_deg
+    ways = fit_headings(
+        field_local, [heading] * 4, [0, 1, 2, 3], interval_m=interval_m,
+        implement_width_m=implement_width_m, vehicle=vehicle, pattern=pattern,
+    )  # fmt: skip
+    fitted = [
+        FittedHeading(heading, way[0], way[1], _length_m(way[0], heading, start_xy, finish_xy))
+        for way in ways
+        if not isinstance(way, InvalidParameterError)
+    ]
+    area = float(field_local.area)
+    slack_m2 = PARITY_SLACK_SHARE * area
+    best_m2 = max((w.covered_m2 for w in fitted), default=-math.inf)
+    if picked.chosen.covered_m2 >= best_m2 - slack_m2:
+        return picked
+    way = min(
+        (w for w in fitted if w.covered_m2 >= best_m2 - slack_m2), key=lambda w: _key(w, objective)
+    )
+    gained_pp = (way.covered_m2 - picked.chosen.covered_m2) / area * 100.0
+    return FittedChoice(way, max(picked.coverage_given_up_pp - gained_pp, 0.0))
+
+
+def _choose_heading(
+    field_local: Polygon,
+    choice: HeadingChoice,
+    *,
+    interval_m: float,
+    implement_width_m: float,
+    vehicle: Vehicle,
+    pattern: Pattern,
+    objective: Objective,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+    lengths_of: LengthScorer,
+    fixed_heading: bool = False,
+) -> FittedChoice:
+    """:func:`choose_convex`'s heading: the search's choice, or a fitted alternative (R5).
+
+    Returns
+    -------
+    FittedChoice
+        The search's choice if its fitted coverage is within 0.2 pp of the best fitted
+        alternative's and no shorter fitted heading keeps the rule, else the fitted heading
+        within the rule that the objective prefers.
     """
     area = float(field_local.area)
     machine: Polygon | None = None
@@ -310,7 +401,7 @@ def choose_convex(
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
     # Edge by edge (planner.turn_reach.edge_loss_m2), the choice may still keep the rule.
     if first is not None and first.covered_m2 > 0.0 and not beaten:
-        given_up = _given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
+        given_up = given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
         if given_up is not None:
             return FittedChoice(first, given_up)
     # The estimate was wrong here (a narrow field whose lines drop out when fitted): the
@@ -447,57 +538,6 @@ _ESTIMATE_ABOVE = 2.0
 _UNSEEN_ERROR = 2.0
 #: Headings fitted in the first block of that check; each next block is twice as large.
 _FIRST_BLOCK = 8
-
-
-#: The edge-by-edge estimate is trusted on fields at least this many turns' reach across
-#: (it ignores the overlap of the strips at corners, which a small field is made of).
-_EDGE_ESTIMATE_MIN_REACHES = 20.0
-
-
-def _given_up_by_edges(
-    field_local: Polygon, heading_deg: float, interval_m: float, vehicle: Vehicle
-) -> float | None:
-    """Coverage the heading gives up by the edge-by-edge estimate [pp], None if beyond R5.
-
-    Scored at every candidate heading (:func:`planner.angles.candidate_headings`): straight
-    lines' coverage in closed form less :func:`planner.turn_reach.edge_loss_m2`. None also
-    where that estimate does not hold (a field only a few turns across).
-    """
-    ring = np.asarray(shapely.orient_polygons(field_local).exterior.coords)[:-1]
-    headings = np.append(candidate_headings(ring), heading_deg)
-    u_ring, _ = to_sweep(ring[:, 0], ring[:, 1], headings[:, None])
-    # The field's least width (a convex field's is across one of its edges).
-    width = float(np.ptp(u_ring, axis=1).min())
-    reach = end_reach_m(vehicle, float(interval_m)) + vehicle.width_m
-    if width < _EDGE_ESTIMATE_MIN_REACHES * reach:
-        return None
-    area = float(field_local.area)
-    estimate = convex_coverage(ring, headings, interval_m)
-    estimate -= edge_loss_m2(vehicle, interval_m, ring, headings) / area
-    given_up = float(estimate.max() - estimate[-1])
-    if given_up > COVERAGE_SLACK:
-        return None
-    return max(given_up, 0.0) * 100.0
-
-
-#: Edge directions planned in full when the search's estimate fails, longest edges first.
-MAX_EDGE_CHECKS = 16
-
-
-def edge_headings(ring_xy: FloatArray) -> FloatArray:
-    """Directions of the longest :data:`MAX_EDGE_CHECKS` edges of a ring [deg, 0–180).
-
-    Examples
-    --------
-    >>> edge_headings(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0]])).tolist()
-    [63.434948823, 90.0, 0.0]
-    """
-    dx = np.roll(ring_xy[:, 0], -1) - ring_xy[:, 0]
-    dy = np.roll(ring_xy[:, 1], -1) - ring_xy[:, 1]
-    length = np.hypot(dx, dy)
-    longest = np.argsort(-length, kind="stable")[:MAX_EDGE_CHECKS]
-    longest = longest[length[longest] > 0]
-    return np.asarray(np.round(np.degrees(np.arctan2(dx[longest], dy[longest])) % 180.0, 9))
 
 
 def _key(planned: FittedHeading, objective: Objective) -> tuple[float, float, float]:

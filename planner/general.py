@@ -25,6 +25,7 @@ from planner.cell_order import EXHAUSTIVE_MAX_CELLS
 from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_headland, reorder
 from planner.cell_route import CellFits, add_cells
 from planner.decomposition import sweep_rings
+from planner.edge_estimates import edge_headings
 from planner.errors import PlanTooLargeError
 from planner.fit_screen import turn_table
 from planner.fitted_cells import (
@@ -34,7 +35,6 @@ from planner.fitted_cells import (
     excluded_variants,
     fit_candidate,
 )
-from planner.fitted_choice import edge_headings
 from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
 from planner.heading_search import score_headings
 from planner.headland_route import add_headland, first_ring_point, ring_order
