@@ -368,7 +368,7 @@ def _laid_out(
     fast = None
     if len(offsets) == len(chains) + 1 and offsets[0] == 0 and offsets[-1] == len(u):
         fast = coverage_kernels.laid_out(
-            np.concatenate([_packed(c) if c.packed is None else c.packed for c in chains]),
+            np.concatenate([packed(c) for c in chains]),
             offsets,
             u,
             v_lo,
@@ -383,6 +383,11 @@ def _laid_out(
         k = slice(int(offsets[c]), int(offsets[c + 1]))
         alone[c] = covered_area(chains[c], u[k], v_lo[k], v_hi[k], d)
     return alone, area, cell
+
+
+def packed(chains: Chains) -> FloatArray:
+    """Return ``chains`` as the compiled loops take them: :attr:`Chains.packed`, or made."""
+    return _packed(chains) if chains.packed is None else chains.packed
 
 
 def _packed(chains: Chains) -> FloatArray:

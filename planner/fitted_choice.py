@@ -15,7 +15,7 @@ every scored heading, then at 0.1° around the shortest that keeps the rule.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +65,11 @@ class FittedHeading:
     length_m: float
 
 
+#: ``fitted_many(headings, variants)``: each heading fitted as that variant drives it, or
+#: the error its fit raised (:func:`choose_convex`'s own fitting).
+FitMany = Callable[[Sequence[float], Sequence[int]], list[FittedHeading | InvalidParameterError]]
+
+
 @dataclass(frozen=True, slots=True)
 class FittedChoice:
     """The heading chosen on fitted lines, and what it gave up against the best of them."""
@@ -89,9 +94,6 @@ def choose_convex(
 ) -> FittedChoice:
     """Fit the search's choice and its alternatives; keep the choice if it keeps the rule.
 
-    The heading is chosen as :func:`_choose_heading` says; then, with a turning radius, the
-    way round the lines are driven too (:func:`_cover_first_way`).
-
     Parameters
     ----------
     field_local : Polygon
@@ -113,6 +115,10 @@ def choose_convex(
     Returns
     -------
     FittedChoice
+        The search's choice if its fitted coverage is within 0.2 pp of the best fitted
+        alternative's and no shorter fitted heading keeps the rule, else the fitted heading
+        within the rule that the objective prefers; with a turning radius, driven the way
+        round that covers most (:func:`cover_first_way`).
 
     Examples
     --------
@@ -132,99 +138,6 @@ def choose_convex(
     ...     lengths_of=lambda h: score_headings(ring, h, 4.0, None, None))
     >>> picked.chosen.heading_deg, picked.coverage_given_up_pp <= 0.2
     (90.0, True)
-    """
-    picked = _choose_heading(
-        field_local,
-        choice,
-        interval_m=interval_m,
-        implement_width_m=implement_width_m,
-        vehicle=vehicle,
-        pattern=pattern,
-        objective=objective,
-        start_xy=start_xy,
-        finish_xy=finish_xy,
-        lengths_of=lengths_of,
-        fixed_heading=fixed_heading,
-    )
-    if vehicle.min_turn_radius_m <= 0.0 or pattern == "snake":
-        return picked
-    return _cover_first_way(
-        picked,
-        field_local,
-        interval_m=interval_m,
-        implement_width_m=implement_width_m,
-        vehicle=vehicle,
-        pattern=pattern,
-        objective=objective,
-        start_xy=start_xy,
-        finish_xy=finish_xy,
-    )
-
-
-def _cover_first_way(
-    picked: FittedChoice,
-    field_local: Polygon,
-    *,
-    interval_m: float,
-    implement_width_m: float,
-    vehicle: Vehicle,
-    pattern: Pattern,
-    objective: Objective,
-    start_xy: tuple[float, float] | None,
-    finish_xy: tuple[float, float] | None,
-) -> FittedChoice:
-    """R5 within the heading: drive the lines the way round that covers clearly more.
-
-    The heading's lines are chosen for length in one of four variants; two turn at one end
-    of the first line and two at the other, and with a turning radius that can cost the
-    field a line (:mod:`planner.parity_kernels`). All four are fitted; the chosen one is kept
-    unless another covers more than :data:`planner.parity_kernels.PARITY_SLACK_SHARE` of the
-    field beyond it, and then the objective's best of those within that of the best is.
-    """
-    heading = picked.chosen.heading_deg
-    ways = fit_headings(
-        field_local, [heading] * 4, [0, 1, 2, 3], interval_m=interval_m,
-        implement_width_m=implement_width_m, vehicle=vehicle, pattern=pattern,
-    )  # fmt: skip
-    fitted = [
-        FittedHeading(heading, way[0], way[1], _length_m(way[0], heading, start_xy, finish_xy))
-        for way in ways
-        if not isinstance(way, InvalidParameterError)
-    ]
-    area = float(field_local.area)
-    slack_m2 = PARITY_SLACK_SHARE * area
-    best_m2 = max((w.covered_m2 for w in fitted), default=-math.inf)
-    if picked.chosen.covered_m2 >= best_m2 - slack_m2:
-        return picked
-    way = min(
-        (w for w in fitted if w.covered_m2 >= best_m2 - slack_m2), key=lambda w: _key(w, objective)
-    )
-    gained_pp = (way.covered_m2 - picked.chosen.covered_m2) / area * 100.0
-    return FittedChoice(way, max(picked.coverage_given_up_pp - gained_pp, 0.0))
-
-
-def _choose_heading(
-    field_local: Polygon,
-    choice: HeadingChoice,
-    *,
-    interval_m: float,
-    implement_width_m: float,
-    vehicle: Vehicle,
-    pattern: Pattern,
-    objective: Objective,
-    start_xy: tuple[float, float] | None,
-    finish_xy: tuple[float, float] | None,
-    lengths_of: LengthScorer,
-    fixed_heading: bool = False,
-) -> FittedChoice:
-    """:func:`choose_convex`'s heading: the search's choice, or a fitted alternative (R5).
-
-    Returns
-    -------
-    FittedChoice
-        The search's choice if its fitted coverage is within 0.2 pp of the best fitted
-        alternative's and no shorter fitted heading keeps the rule, else the fitted heading
-        within the rule that the objective prefers.
     """
     area = float(field_local.area)
     machine: Polygon | None = None
@@ -258,8 +171,14 @@ def _choose_heading(
             raise one
         return one
 
+    def way_round(picked: FittedChoice) -> FittedChoice:
+        # With a turning radius, R5 within the heading too (cover_first_way).
+        if vehicle.min_turn_radius_m <= 0.0 or pattern == "snake":
+            return picked
+        return cover_first_way(picked, fitted_many, area, objective)
+
     if fixed_heading:
-        return FittedChoice(fitted(choice.heading_deg, choice.variant), 0.0)
+        return way_round(FittedChoice(fitted(choice.heading_deg, choice.variant), 0.0))
     error: InvalidParameterError | None = None
     try:
         first: FittedHeading | None = fitted(choice.heading_deg, choice.variant)
@@ -306,7 +225,7 @@ def _choose_heading(
             near = _near_misses(choice, estimated_best, objective)
             if not near:
                 lost_pp = max(best_doubtful - first.covered_m2, 0.0) / area * 100.0
-                return FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp))
+                return way_round(FittedChoice(first, max(choice.coverage_given_up_pp, lost_pp)))
             # Shorter headings the estimate ranks just beyond the rule: fitted, and the rule
             # is held on what they really cover.
             fits = fitted_many([h for h, _ in near], [k for _, k in near])
@@ -333,7 +252,7 @@ def _choose_heading(
                 lost_pp = max(best_m2 - picked.covered_m2, 0.0) / area * 100.0
                 if picked is first:
                     lost_pp = max(choice.coverage_given_up_pp, lost_pp)
-                return FittedChoice(picked, lost_pp)
+                return way_round(FittedChoice(picked, lost_pp))
     # Below the estimate's rule, beaten by a fitted alternative, or no turn fits the choice:
     # the estimate does not hold on this field. Fitted coverage moves by most of a
     # percentage point within half a degree where a line meets a corner, so a few
@@ -396,14 +315,14 @@ def _choose_heading(
             best_m2 = max(c.covered_m2 for c in checked)
         eligible = [c for c in checked if c.covered_m2 >= best_m2 - slack_m2]
         picked = min(eligible, key=lambda c: _key(c, objective))
-        return FittedChoice(picked, max(best_m2 - picked.covered_m2, 0.0) / area * 100.0)
+        return way_round(FittedChoice(picked, max(best_m2 - picked.covered_m2, 0.0) / area * 100.0))
     # The search's estimate counts lines, not the slope of the boundary they end on, and on a
     # large field a vehicle with wide turns pulls its ends back far more on slanted edges.
     # Edge by edge (planner.turn_reach.edge_loss_m2), the choice may still keep the rule.
     if first is not None and first.covered_m2 > 0.0 and not beaten:
         given_up = given_up_by_edges(field_local, choice.heading_deg, interval_m, vehicle)
         if given_up is not None:
-            return FittedChoice(first, given_up)
+            return way_round(FittedChoice(first, given_up))
     # The estimate was wrong here (a narrow field whose lines drop out when fitted): the
     # alternatives and every long edge's direction are planned in full.
     edges = edge_headings(np.asarray(field_local.exterior.coords)[:-1])
@@ -430,7 +349,34 @@ def _choose_heading(
         eligible = [o for o in others if o.covered_m2 >= best_m2 - slack_m2]
         chosen = min(eligible, key=lambda o: _key(o, objective))
     given_up_pp = max(best_m2 - chosen.covered_m2, 0.0) / area * 100.0
-    return FittedChoice(chosen, given_up_pp)
+    return way_round(FittedChoice(chosen, given_up_pp))
+
+
+def cover_first_way(
+    picked: FittedChoice,
+    fitted_many: FitMany,
+    area_m2: float,
+    objective: Objective,
+) -> FittedChoice:
+    """R5 within the heading: drive the lines the way round that covers clearly more.
+
+    The heading's lines are chosen for length in one of four variants; two turn at one end
+    of the first line and two at the other, and with a turning radius that can cost the
+    field a line (:mod:`planner.parity_kernels`). All four are fitted (``fitted_many``, as
+    :func:`choose_convex` fits headings and variants); the chosen one is kept unless another
+    covers more than :data:`planner.parity_kernels.PARITY_SLACK_SHARE` of the field's area
+    ``area_m2`` beyond it, and then the objective's best of those within that of the best is.
+    """
+    heading = picked.chosen.heading_deg
+    ways = [w for w in fitted_many([heading] * 4, [0, 1, 2, 3]) if isinstance(w, FittedHeading)]
+    slack_m2 = PARITY_SLACK_SHARE * area_m2
+    best_m2 = max((w.covered_m2 for w in ways), default=-math.inf)
+    if picked.chosen.covered_m2 >= best_m2 - slack_m2:
+        return picked
+    eligible = [w for w in ways if w.covered_m2 >= best_m2 - slack_m2]
+    way = min(eligible, key=lambda w: _key(w, objective))
+    gained_pp = (way.covered_m2 - picked.chosen.covered_m2) / area_m2 * 100.0
+    return FittedChoice(way, max(picked.coverage_given_up_pp - gained_pp, 0.0))
 
 
 def _scored(choice: HeadingChoice) -> list[tuple[float, int, float]]:

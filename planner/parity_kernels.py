@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from planner.coverage import Chains
+from planner.coverage import Chains, packed
 from planner.fit_screen import CACHED_SLIDES, TurnTable, _fit_cell
 from planner.kernel_helpers import _jit, _jit_counted_by_caller
 
@@ -106,10 +106,10 @@ def parity_losses_m2(
     ndarray, shape (cells, 2)
         The loss with the cell's first line (leftmost) driven up, then down.
     """
-    packed = [_packed(c) for c in chains]
-    chains_at = np.concatenate([[0], np.cumsum([len(p) for p in packed])]).astype(np.int64)
+    packed_chains = [packed(c) for c in chains]
+    chains_at = np.concatenate([[0], np.cumsum([len(p) for p in packed_chains])]).astype(np.int64)
     return _parity_losses(
-        np.concatenate(packed) if packed else np.zeros(0),
+        np.concatenate(packed_chains) if packed_chains else np.zeros(0),
         chains_at,
         np.ascontiguousarray(offsets, dtype=np.int64),
         np.ascontiguousarray(u, dtype=np.float64),
@@ -163,13 +163,6 @@ def parity_choice(losses_m2: FloatArray, line_counts: IntArray, slack_m2: float)
         ],
         axis=1,
     )
-
-
-def _packed(chains: Chains) -> FloatArray:
-    if chains.packed is not None:
-        return chains.packed
-    sizes = np.array([len(chains.lo_u), len(chains.hi_u)], dtype=np.float64)
-    return np.concatenate([sizes, chains.lo_u, chains.lo_v, chains.hi_u, chains.hi_v])
 
 
 def warm_up() -> None:

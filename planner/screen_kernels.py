@@ -28,9 +28,8 @@ from planner.cell_kernels import _scan
 from planner.coverage_kernels import _chains, _edge, _laid_out, _piece_area
 from planner.decomposition import SweepRings
 from planner.decomposition_kernels import _part_cells
-from planner.fit_screen import CACHED_SLIDES, _fit_cell
 from planner.kernel_helpers import _clip, _jit, _pairwise_sum, _right
-from planner.parity_kernels import cell_loss_m2
+from planner.parity_kernels import _parity_losses, cell_loss_m2
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -381,30 +380,16 @@ def _fitted_m2(
 ) -> float:
     """Return what fitting takes off one heading's cover [m²].
 
-    Each cell is fitted both ways (:func:`planner.fit_screen._fit_cell`) and counted as the
-    plan will drive it (:func:`planner.parity_kernels.cell_loss_m2`).
+    Each cell is fitted both ways round (:func:`planner.parity_kernels._parity_losses`) and
+    counted as the plan will drive it (:func:`planner.parity_kernels.cell_loss_m2`).
     """
-    work = np.empty((8, len(line_u)))
-    flags = np.empty((3, len(line_u)), dtype=np.bool_)
-    cache_keys = np.empty(5 * CACHED_SLIDES, dtype=np.int64)
-    cache_values = np.empty(2 * CACHED_SLIDES)
+    losses = _parity_losses(
+        all_chains, chains_at, offsets, line_u, v_lo, v_hi, d, table, table_beyond_m, table_scalars
+    )
     total = 0.0
     for c in range(len(offsets) - 1):
-        k0, k1 = offsets[c], offsets[c + 1]
-        if k1 - k0 < 2:
-            continue  # one line: no turn
-        chains = all_chains[chains_at[c] : chains_at[c + 1]]
-        up_m2 = _fit_cell(
-            chains, line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], True,
-            table, table_beyond_m, table_scalars, cache_keys, cache_values,
-            work[:, k0:k1], flags[:, k0:k1], d,
-        )  # fmt: skip
-        down_m2 = _fit_cell(
-            chains, line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], False,
-            table, table_beyond_m, table_scalars, cache_keys, cache_values,
-            work[:, k0:k1], flags[:, k0:k1], d,
-        )  # fmt: skip
-        total += cell_loss_m2(up_m2, down_m2, parity_slack_m2)
+        if offsets[c + 1] - offsets[c] >= 2:  # one line: no turn
+            total += cell_loss_m2(losses[c, 0], losses[c, 1], parity_slack_m2)
     return total
 
 
