@@ -557,15 +557,46 @@ def add_member(
     """Give a user (made if ``password`` is given and none exists) a role in the organisation.
 
     The password is hashed only for a new user, before the write lock (:func:`create_user`).
+    On PostgreSQL a concurrent request (a double-click, a client's retry, another owner) may
+    add the same user or membership between this one's read and its write; the write is then
+    rolled back and done once more, finding what the other made: the answer is the one the
+    requests would get one after another (an existing user keeps their password).
 
     Raises
     ------
     AccountError
         For an unknown user without a password, or a bad name or password.
+    ConflictError
+        If the write still conflicts on its second try, or the organisation would have no
+        owner left.
     """
     check_role(role)
     name = check_username(username)
-    user, password_hash = _begin_user_write(session, name, password)
+    for _attempt in range(2):
+        user, password_hash = _begin_user_write(session, name, password)
+        try:
+            return _store_member(session, organisation_id, name, user, password_hash, role)
+        except IntegrityError:
+            session.rollback()
+    # The wording of the database's own conflict (app.errors), so it is translated too.
+    raise ConflictError(
+        "username: the request conflicts with a change made at the same time; retry"
+    )
+
+
+def _store_member(
+    session: Session,
+    organisation_id: int,
+    name: str,
+    user: User | None,
+    password_hash: str | AccountError | None,
+    role: str,
+) -> tuple[User, Membership]:
+    """Do :func:`add_member`'s writes in the caller's write transaction; commit.
+
+    ``user`` is the user called ``name`` as read in that transaction (None: add it). Raises
+    IntegrityError if a concurrent transaction added the same user or membership.
+    """
     if user is None:
         user = _new_user(session, name, password_hash)
     member = session.scalar(

@@ -16,7 +16,10 @@ router = APIRouter(prefix="/members", tags=["accounts"])
 
 _ERRORS: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorRead, "description": "Not a member"},
-    409: {"model": ErrorRead, "description": "The organisation would have no owner left"},
+    409: {
+        "model": ErrorRead,
+        "description": "No owner would be left, or a concurrent change conflicted",
+    },
     422: {"model": ErrorRead, "description": "The input named in `detail` is wrong"},
 }
 

@@ -9,12 +9,13 @@ from typing import Any
 import pytest
 from fastapi import FastAPI
 from sqlalchemy import delete, func, select
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 from starlette.testclient import TestClient
 
 from app import accounts
 from app.auth_models import LoginAttempt, Membership, Organisation, User
-from app.errors import AccountError
+from app.errors import AccountError, ConflictError, status_for
 from app.models import Plan
 from tests.app.conftest import TEST_PASSWORD, ClientFactory, Workspace, add_user
 
@@ -476,3 +477,20 @@ def test_a_user_made_between_the_read_and_the_write_keeps_their_password(
     user = accounts.create_user(session, "twin", "a new long password", organisation="coop")
     assert hashes == ["a new long password"]  # made before the write, then not needed
     assert accounts.verify_password(user.password_hash, TEST_PASSWORD)
+
+
+def test_adding_a_member_that_conflicts_twice_is_a_409_on_the_username(
+    session: Session, workspace: Workspace, monkeypatch: pytest.MonkeyPatch
+):
+    # A first conflict is retried (tests.app.test_accounts_concurrency); a second one is told.
+    tries: list[str] = []
+
+    def conflict(_session: Session, _org: int, name: str, *_rest: object) -> None:
+        tries.append(name)
+        raise IntegrityError("INSERT INTO users", {}, Exception("duplicate key"))
+
+    monkeypatch.setattr(accounts, "_store_member", conflict)
+    with pytest.raises(ConflictError, match="^username: the request conflicts") as refused:
+        accounts.add_member(session, workspace.organisation_id, "newcomer", "viewer", "long enough")
+    assert tries == ["newcomer", "newcomer"] and status_for(refused.value) == 409
+    assert not session.in_transaction()

@@ -1,4 +1,4 @@
-"""Accounts under concurrent writers: one first owner, and no Argon2 under the write lock.
+"""Accounts under concurrent writers: one first owner, one new member, no Argon2 under the lock.
 
 On committed sessions of a database made for the test (a SQLite file; PostgreSQL too when
 ``TILLPATH_TEST_DATABASE_URL`` is set), as in :mod:`tests.app.test_live_server`.
@@ -23,7 +23,8 @@ from app.auth_models import Membership, Organisation, User
 from app.db import get_engine, make_engine, upgrade_database
 from app.main import create_app
 from app.settings import Settings
-from tests.app.test_live_server import database_url, serving  # noqa: F401
+from app.testing import ServerUrl
+from tests.app.test_live_server import database_url, server_url, serving  # noqa: F401
 
 #: First sign-ups sent at once.
 SIGN_UPS = 4
@@ -131,3 +132,49 @@ def _timed(function: Callable[..., object], *args: object) -> float:
     start = time.perf_counter()
     function(*args)
     return time.perf_counter() - start
+
+
+#: Owners' "add member" requests for one new username sent at once, and rounds of them.
+SAME_MEMBER_REQUESTS = 6
+SAME_MEMBER_ROUNDS = 3
+
+
+def test_concurrent_adds_of_one_new_member_all_succeed_and_make_one_user(
+    database_url: str,  # noqa: F811
+    server_url: ServerUrl,  # noqa: F811
+):
+    """A double-click or a client's retry adds one user and one membership, and no 5xx.
+
+    Every request reads "no such user" and hashes the password before the write transaction,
+    so on PostgreSQL all but the first then insert the same username (or membership) and hit
+    the unique constraint; each must then see the user the first made and give it the role,
+    as if the requests had come one after another.
+    """
+    start = threading.Barrier(SAME_MEMBER_REQUESTS)
+
+    def add(username: str) -> httpx2.Response:
+        with httpx2.Client(base_url=server_url, headers=server_url.headers, timeout=60) as owner:
+            body = {"username": username, "role": "planner", "password": PASSWORD}
+            start.wait()
+            return owner.post("/api/members", json=body)
+
+    names = [f"newcomer{r}" for r in range(SAME_MEMBER_ROUNDS)]
+    with ThreadPoolExecutor(SAME_MEMBER_REQUESTS) as pool:
+        for name in names:
+            answers = list(pool.map(add, [name] * SAME_MEMBER_REQUESTS))
+            codes = [a.status_code for a in answers]
+            assert codes == [201] * SAME_MEMBER_REQUESTS, [a.text for a in answers]
+            assert len({a.json()["user_id"] for a in answers}) == 1
+            assert {a.json()["role"] for a in answers} == {"planner"}
+
+    with Session(get_engine(database_url)) as session:
+        rows = session.execute(
+            select(User.username, Membership.role)
+            .join(Membership, Membership.user_id == User.id)
+            .where(
+                User.username.in_(names),
+                Membership.organisation_id == server_url.account.organisation_id,
+            )
+            .order_by(User.username)
+        ).all()
+        assert [tuple(r) for r in rows] == [(name, "planner") for name in names]
