@@ -1,4 +1,6 @@
-"""Accounts: users, organisations, memberships, API tokens, sign-in sessions and throttling.
+"""Accounts: users, organisations, API tokens, sign-in sessions and throttling.
+
+An organisation's members (roles, the last owner) are :mod:`app.members`'s.
 
 Passwords are hashed with Argon2id by argon2-cffi (its ``PasswordHasher`` defaults, RFC 9106's
 low-memory profile); tokens and session ids are 256-bit ``secrets.token_urlsafe`` values stored
@@ -19,7 +21,6 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from app.auth import (
-    MAX_ID,
     Access,
     new_api_token,
     new_secret,
@@ -144,7 +145,7 @@ def _user_named(session: Session, name: str) -> User | None:
     return session.scalar(select(User).where(User.username == name))
 
 
-def _begin_user_write(
+def begin_user_write(
     session: Session, name: str, password: str | None
 ) -> tuple[User | None, str | AccountError | None]:
     """Begin the write transaction (the caller commits) that adds user ``name`` or gives a role.
@@ -178,7 +179,7 @@ def _begin_user_write(
     return user, password_hash
 
 
-def _new_user(session: Session, name: str, password_hash: str | AccountError | None) -> User:
+def new_user(session: Session, name: str, password_hash: str | AccountError | None) -> User:
     """Add user ``name`` (flushed); raise AccountError if the password is missing or bad."""
     if password_hash is None:
         raise AccountError(f"username: no user called {name!r}; give a password to make one")
@@ -202,7 +203,7 @@ def create_user(
 
     A user that exists already keeps its password and gets the role in the organisation. The
     password is hashed only for a new user, before the write transaction that shares the reads
-    and writes (:func:`_begin_user_write`).
+    and writes (:func:`begin_user_write`).
 
     Raises
     ------
@@ -211,7 +212,7 @@ def create_user(
     """
     name = check_username(username)
     check_role(role)
-    user, password_hash = _begin_user_write(session, name, password)
+    user, password_hash = begin_user_write(session, name, password)
     return _store_user(session, name, user, password_hash, organisation=organisation, role=role)
 
 
@@ -229,7 +230,7 @@ def _store_user(
     ``user`` is the user called ``name`` as read in that transaction (None: add it).
     """
     if user is None:
-        user = _new_user(session, name, password_hash)
+        user = new_user(session, name, password_hash)
     org = get_or_create_organisation(session, organisation)
     membership = session.scalar(
         select(Membership).where(
@@ -510,125 +511,3 @@ def sign_up_first(session: Session, username: str, password: str, organisation: 
     # No user at all (checked again above, under the lock): the hash made before it is needed.
     user = _user_named(session, name)
     return _store_user(session, name, user, password_hash, organisation=organisation, role="owner")
-
-
-# --- Members (owners manage them) -------------------------------------------------------------
-
-
-def list_members(session: Session, organisation_id: int) -> list[tuple[User, Membership]]:
-    """Return the organisation's members with their memberships, by username."""
-    rows = session.execute(
-        select(User, Membership)
-        .join(Membership, Membership.user_id == User.id)
-        .where(Membership.organisation_id == organisation_id)
-        .order_by(User.username)
-    ).all()
-    return [(u, m) for u, m in rows]
-
-
-def _membership(session: Session, organisation_id: int, user_id: int) -> Membership:
-    if not 1 <= user_id <= MAX_ID:  # not a 32-bit key: no such member (and no SQL error)
-        raise NotFoundError("member", user_id)
-    found = session.scalar(
-        select(Membership).where(
-            Membership.organisation_id == organisation_id, Membership.user_id == user_id
-        )
-    )
-    if found is None:
-        raise NotFoundError("member", user_id)
-    return found
-
-
-def _keep_an_owner(session: Session, membership: Membership) -> None:
-    if membership.role != "owner":
-        return
-    owners = session.scalar(
-        select(func.count())
-        .select_from(Membership)
-        .where(Membership.organisation_id == membership.organisation_id, Membership.role == "owner")
-    )
-    if (owners or 0) <= 1:
-        raise ConflictError("role: the organisation would have no owner left; make another first")
-
-
-def add_member(
-    session: Session, organisation_id: int, username: str, role: str, password: str | None
-) -> tuple[User, Membership]:
-    """Give a user (made if ``password`` is given and none exists) a role in the organisation.
-
-    The password is hashed only for a new user, before the write lock (:func:`create_user`).
-    On PostgreSQL a concurrent request (a double-click, a client's retry, another owner) may
-    add the same user or membership between this one's read and its write; the write is then
-    rolled back and done once more, finding what the other made: the answer is the one the
-    requests would get one after another (an existing user keeps their password).
-
-    Raises
-    ------
-    AccountError
-        For an unknown user without a password, or a bad name or password.
-    ConflictError
-        If the write still conflicts on its second try, or the organisation would have no
-        owner left.
-    """
-    check_role(role)
-    name = check_username(username)
-    for _attempt in range(2):
-        user, password_hash = _begin_user_write(session, name, password)
-        try:
-            return _store_member(session, organisation_id, name, user, password_hash, role)
-        except IntegrityError:
-            session.rollback()
-    # The wording of the database's own conflict (app.errors), so it is translated too.
-    raise ConflictError(
-        "username: the request conflicts with a change made at the same time; retry"
-    )
-
-
-def _store_member(
-    session: Session,
-    organisation_id: int,
-    name: str,
-    user: User | None,
-    password_hash: str | AccountError | None,
-    role: str,
-) -> tuple[User, Membership]:
-    """Do :func:`add_member`'s writes in the caller's write transaction; commit.
-
-    ``user`` is the user called ``name`` as read in that transaction (None: add it). Raises
-    IntegrityError if a concurrent transaction added the same user or membership.
-    """
-    if user is None:
-        user = _new_user(session, name, password_hash)
-    member = session.scalar(
-        select(Membership).where(
-            Membership.organisation_id == organisation_id, Membership.user_id == user.id
-        )
-    )
-    if member is None:
-        member = Membership(user_id=user.id, organisation_id=organisation_id, role=role)
-        session.add(member)
-    else:
-        if role != "owner":
-            _keep_an_owner(session, member)
-        member.role = role
-    session.commit()
-    return user, member
-
-
-def change_member_role(session: Session, organisation_id: int, user_id: int, role: str) -> None:
-    """Change a member's role; the last owner stays an owner."""
-    begin_write(session)
-    member = _membership(session, organisation_id, user_id)
-    if role != "owner":
-        _keep_an_owner(session, member)
-    member.role = check_role(role)
-    session.commit()
-
-
-def remove_member(session: Session, organisation_id: int, user_id: int) -> None:
-    """Take a user out of the organisation; the last owner stays."""
-    begin_write(session)
-    member = _membership(session, organisation_id, user_id)
-    _keep_an_owner(session, member)
-    session.delete(member)
-    session.commit()

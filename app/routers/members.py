@@ -6,7 +6,7 @@ from typing import Any
 
 from fastapi import APIRouter, Response, status
 
-from app import accounts
+from app import members
 from app.auth import Owner
 from app.auth_schemas import MemberCreate, MemberList, MemberRead, MemberUpdate
 from app.db import SessionDep
@@ -31,14 +31,14 @@ def _read(user: Any, member: Any) -> MemberRead:
 @router.get("", response_model=MemberList)
 def list_members(session: SessionDep, access: Owner) -> MemberList:
     """List the organisation's members and their roles."""
-    rows = accounts.list_members(session, access.organisation_id)
+    rows = members.list_members(session, access.organisation_id)
     return MemberList(items=[_read(u, m) for u, m in rows])
 
 
 @router.post("", response_model=MemberRead, status_code=status.HTTP_201_CREATED, responses=_ERRORS)
 def add_member(body: MemberCreate, session: SessionDep, access: Owner) -> MemberRead:
     """Add a user with a role (a new user when `password` is given), or change their role."""
-    user, member = accounts.add_member(
+    user, member = members.add_member(
         session, access.organisation_id, body.username, body.role, body.password
     )
     return _read(user, member)
@@ -49,8 +49,8 @@ def change_member(
     user_id: int, body: MemberUpdate, session: SessionDep, access: Owner
 ) -> MemberRead:
     """Change a member's role (the last owner stays an owner)."""
-    accounts.change_member_role(session, access.organisation_id, user_id, body.role)
-    rows = accounts.list_members(session, access.organisation_id)
+    members.change_member_role(session, access.organisation_id, user_id, body.role)
+    rows = members.list_members(session, access.organisation_id)
     return next(_read(u, m) for u, m in rows if u.id == user_id)
 
 
@@ -59,4 +59,4 @@ def change_member(
 )
 def remove_member(user_id: int, session: SessionDep, access: Owner) -> None:
     """Take a member out of the organisation (their account stays)."""
-    accounts.remove_member(session, access.organisation_id, user_id)
+    members.remove_member(session, access.organisation_id, user_id)

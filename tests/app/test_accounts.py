@@ -9,13 +9,12 @@ from typing import Any
 import pytest
 from fastapi import FastAPI
 from sqlalchemy import delete, func, select
-from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 from starlette.testclient import TestClient
 
-from app import accounts
+from app import accounts, members
 from app.auth_models import LoginAttempt, Membership, Organisation, User
-from app.errors import AccountError, ConflictError, status_for
+from app.errors import AccountError
 from app.models import Plan
 from tests.app.conftest import TEST_PASSWORD, ClientFactory, Workspace, add_user
 
@@ -336,35 +335,6 @@ def test_a_cross_site_form_cannot_sign_a_browser_in(app: FastAPI, workspace: Wor
         assert "set-cookie" not in response.headers
 
 
-def test_owners_manage_members_and_keep_an_owner(
-    client: TestClient, app: FastAPI, workspace: Workspace
-):
-    made = client.post(
-        "/api/members",
-        json={"username": "newcomer", "role": "planner", "password": "a long password"},
-    )
-    assert made.status_code == 201 and made.json()["role"] == "planner"
-    names = {m["username"]: m["role"] for m in client.get("/api/members").json()["items"]}
-    assert names == {
-        "newcomer": "planner",
-        "owner": "owner",
-        "planner": "planner",
-        "viewer": "viewer",
-    }
-    newcomer, _csrf = sign_in(app, "newcomer", "a long password")
-    assert newcomer.get("/api/plans").status_code == 200
-    unknown = client.post("/api/members", json={"username": "ghost", "role": "viewer"})
-    assert unknown.status_code == 422 and "give a password" in unknown.json()["detail"]
-
-    owner_id = workspace.users["owner"].id
-    last = client.patch(f"/api/members/{owner_id}", json={"role": "viewer"})
-    assert last.status_code == 409 and "no owner left" in last.json()["detail"]
-    assert client.delete(f"/api/members/{owner_id}").status_code == 409
-    user_id = made.json()["user_id"]
-    assert client.delete(f"/api/members/{user_id}").status_code == 204
-    assert newcomer.get("/api/plans").status_code == 403  # belongs to no organisation now
-
-
 def test_member_ids_beyond_32_bits_are_404(client: TestClient):
     # Found by schemathesis: such an id reached the database and failed there (500).
     huge = 1264658853214972534587392
@@ -396,7 +366,7 @@ def test_an_existing_user_added_with_a_password_costs_no_argon2_and_keeps_theirs
     session: Session, workspace: Workspace, hashes: list[str]
 ):
     planner = workspace.users["planner"]
-    user, member = accounts.add_member(
+    user, member = members.add_member(
         session, workspace.other_organisation_id, "planner", "viewer", "a new long password"
     )
     again = accounts.create_user(session, "planner", "another long password", organisation="coop")
@@ -407,7 +377,7 @@ def test_an_existing_user_added_with_a_password_costs_no_argon2_and_keeps_theirs
     for new in ("a new long password", "another long password"):
         assert not accounts.verify_password(again.password_hash, new)
     # A new user's password is hashed, once.
-    accounts.add_member(session, workspace.organisation_id, "newcomer", "viewer", "long enough")
+    members.add_member(session, workspace.organisation_id, "newcomer", "viewer", "long enough")
     assert hashes == ["long enough"]
 
 
@@ -418,7 +388,7 @@ def test_a_bad_password_refuses_a_new_user_and_is_ignored_for_an_existing_one(
         accounts.check_password("short")
     for make in (
         lambda: accounts.create_user(session, "newcomer", "short", organisation="coop"),
-        lambda: accounts.add_member(
+        lambda: members.add_member(
             session, workspace.organisation_id, "newcomer", "viewer", "short"
         ),
     ):
@@ -427,7 +397,7 @@ def test_a_bad_password_refuses_a_new_user_and_is_ignored_for_an_existing_one(
         assert str(refused.value) == str(expected.value)
         session.rollback()
         assert session.scalar(select(User).where(User.username == "newcomer")) is None
-    _user, member = accounts.add_member(
+    _user, member = members.add_member(
         session, workspace.other_organisation_id, "planner", "viewer", "short"
     )
     assert member.role == "viewer"
@@ -460,7 +430,7 @@ def test_a_user_deleted_between_the_read_and_the_write_is_made_anew(
     _between_read_and_write(
         monkeypatch, lambda s: s.execute(delete(User).where(User.username == "planner"))
     )
-    user, member = accounts.add_member(
+    user, member = members.add_member(
         session, workspace.other_organisation_id, "planner", "viewer", "a new long password"
     )
     assert hashes == ["a new long password"] and member.role == "viewer"
@@ -477,20 +447,3 @@ def test_a_user_made_between_the_read_and_the_write_keeps_their_password(
     user = accounts.create_user(session, "twin", "a new long password", organisation="coop")
     assert hashes == ["a new long password"]  # made before the write, then not needed
     assert accounts.verify_password(user.password_hash, TEST_PASSWORD)
-
-
-def test_adding_a_member_that_conflicts_twice_is_a_409_on_the_username(
-    session: Session, workspace: Workspace, monkeypatch: pytest.MonkeyPatch
-):
-    # A first conflict is retried (tests.app.test_accounts_concurrency); a second one is told.
-    tries: list[str] = []
-
-    def conflict(_session: Session, _org: int, name: str, *_rest: object) -> None:
-        tries.append(name)
-        raise IntegrityError("INSERT INTO users", {}, Exception("duplicate key"))
-
-    monkeypatch.setattr(accounts, "_store_member", conflict)
-    with pytest.raises(ConflictError, match="^username: the request conflicts") as refused:
-        accounts.add_member(session, workspace.organisation_id, "newcomer", "viewer", "long enough")
-    assert tries == ["newcomer", "newcomer"] and status_for(refused.value) == 409
-    assert not session.in_transaction()

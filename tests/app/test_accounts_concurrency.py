@@ -18,7 +18,7 @@ import httpx2
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from app import accounts
+from app import accounts, members
 from app.auth_models import Membership, Organisation, User
 from app.db import get_engine, make_engine, upgrade_database
 from app.main import create_app
@@ -111,7 +111,7 @@ def test_add_member_hashes_the_new_password_before_taking_the_write_lock(tmp_pat
     try:
         for i in range(3):
             with Session(engine, expire_on_commit=False) as session:
-                user, member = accounts.add_member(
+                user, member = members.add_member(
                     session, organisation_id, f"new{i}", "viewer", PASSWORD
                 )
                 assert member.role == "viewer"
