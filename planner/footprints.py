@@ -9,10 +9,11 @@ import numpy.typing as npt
 import shapely
 from shapely import MultiPolygon, Polygon
 
+from planner.band_kernels import boxes_over_rings_m2
 from planner.cell_plans import CellPlan
 from planner.coverage import Chains, covered_cells
 from planner.line_ends import FittedLines
-from planner.lines import from_sweep
+from planner.lines import from_sweep, to_sweep
 
 #: Grid that footprint unions snap to [m] (see :func:`planner.general.plan_general`).
 UNION_GRID_M = 1e-6
@@ -33,7 +34,7 @@ def lines_covered(
 
     Inside each cell (a piece of the machine area) exactly, by its chains. Beyond the cells
     lies the band half a vehicle wide along the boundary: the outermost line of a cell may
-    till a strip of it, which is added with shapely (two boxes per cell). The corners of
+    till a strip of it, which is added by :func:`band_m2` (two boxes per cell). The corners of
     footprints that poke past a slanted line end are not counted (a slight underestimate).
     """
     cells_m2, band_m2 = cells_and_band_m2(plan, fitted, field_local, area, heading, width_m)
@@ -57,18 +58,42 @@ def cells_and_band_m2(
     total = lines_in_cells_m2(lines, width_m)
     # Only a cell's outermost lines can reach past it into the band.
     ends = np.stack([lines.offsets[:-1], lines.offsets[1:] - 1], axis=1).ravel()
-    boxes = footprint_boxes(lines.u[ends], lines.v_lo[ends], lines.v_hi[ends], heading, width_m)
-    band = 0.0
-    if len(boxes):
-        shapely.prepare(area)
-        out = boxes[~shapely.contains(area, boxes)]
-        if len(out):
-            reach = union_boxes(out)
-            band = float(
-                shapely.intersection(field_local, reach).area
-                - shapely.intersection(area, reach).area
-            )
+    band = band_m2(
+        lines.u[ends], lines.v_lo[ends], lines.v_hi[ends], field_local, area, heading, width_m
+    )
     return total, band
+
+
+def band_m2(
+    u: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    field_local: Polygon | MultiPolygon,
+    area: Polygon | MultiPolygon,
+    heading: float,
+    width_m: float,
+) -> float:
+    """Area the footprints of lines ``u, [lo, hi]`` (sweep frame) cover beyond ``area`` [m²].
+
+    That is, of the union of their boxes (:func:`footprint_boxes`), the part inside
+    ``field_local`` less the part inside ``area``. The boxes are aligned with the sweep
+    frame, so this is measured there without an overlay (:mod:`planner.band_kernels`).
+    """
+    half = width_m / 2.0
+    keep = hi > lo
+    if not keep.any() or not half > 0.0:
+        return 0.0
+    parts, polygon = shapely.get_parts([field_local, area], return_index=True)
+    rings, part = shapely.get_rings(parts, return_index=True)
+    xy, ring = shapely.get_coordinates(rings, return_index=True)
+    ends = np.searchsorted(ring, np.arange(len(rings)), side="right").astype(np.int64)
+    exterior = np.concatenate([[True], part[1:] != part[:-1]])
+    signs = np.where(exterior, 1.0, -1.0) * np.where(polygon[part] == 0, 1.0, -1.0)
+    ring_u, ring_v = to_sweep(xy[:, 0], xy[:, 1], heading)
+    u = u[keep]
+    return float(
+        boxes_over_rings_m2(u - half, u + half, lo[keep], hi[keep], ring_u, ring_v, ends, signs)
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,19 +145,6 @@ def lines_in_cells_m2(lines: CellLines, width_m: float) -> float:
     :func:`planner.coverage.covered_area` over the cells.
     """
     return covered_cells(lines.chains, lines.offsets, lines.u, lines.v_lo, lines.v_hi, width_m)
-
-
-def union_boxes(boxes: npt.NDArray[np.object_]) -> shapely.Geometry:
-    """Union of footprint boxes: exact overlay, snapped to :data:`UNION_GRID_M` if that fails.
-
-    A handful of rectangles unite robustly without a precision grid, five times faster; the
-    snapped overlay is the fallback for the near-degenerate case GEOS refuses.
-    """
-    try:
-        united: shapely.Geometry = shapely.union_all(boxes)
-    except shapely.errors.GEOSException:
-        united = shapely.union_all(boxes, grid_size=UNION_GRID_M)
-    return united
 
 
 def line_footprints(fitted: list[FittedLines], heading: float, width_m: float) -> list[Polygon]:

@@ -4,7 +4,8 @@ The compiled loops live in :mod:`planner.kernels` (the heading scorers and the h
 other kernel modules build on) and in :mod:`planner.fit_kernels`,
 :mod:`planner.coverage_kernels`, :mod:`planner.cell_kernels`, :mod:`planner.order_kernels`,
 :mod:`planner.edge_kernels`, :mod:`planner.decomposition_kernels`,
-:mod:`planner.screen_kernels`, :mod:`planner.parity_kernels` and :mod:`planner.turn_kernels`.
+:mod:`planner.screen_kernels`, :mod:`planner.parity_kernels`, :mod:`planner.turn_kernels`
+and :mod:`planner.band_kernels`.
 Each module warms its own kernels; this module, above them all, warms them all, so that
 :mod:`planner.kernels` imports none of the modules that import it.
 """
@@ -12,6 +13,7 @@ Each module warms its own kernels; this module, above them all, warms them all, 
 from __future__ import annotations
 
 from planner import (
+    band_kernels,
     cell_kernels,
     coverage_kernels,
     decomposition_kernels,
@@ -42,3 +44,4 @@ def warm_up() -> None:
     screen_kernels.warm_up()
     parity_kernels.warm_up()
     turn_kernels.warm_up()
+    band_kernels.warm_up()
