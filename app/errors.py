@@ -193,6 +193,19 @@ def status_for(exc: BaseException) -> int:
     return 500
 
 
+def _cause(exc: Exception) -> str:
+    """Return the database's own first line for ``exc``: no SQL, no parameters.
+
+    SQLAlchemy's text of an error carries the statement and its parameters, which can hold a
+    password's or a token's hash; the driver's first line names the constraint or the cause
+    (PostgreSQL puts the key's value on a DETAIL line after it).
+    """
+    orig = getattr(exc, "orig", None)
+    cause = exc if orig is None else orig
+    text = str(cause).strip().splitlines()
+    return f"{type(cause).__name__}: {text[0] if text else ''}"
+
+
 def error_response(exc: Exception, lang: str = DEFAULT_LANGUAGE) -> JSONResponse:
     """Build the JSON answer for ``exc``: its status from the table, ``str(exc)`` as detail.
 
@@ -204,7 +217,7 @@ def error_response(exc: Exception, lang: str = DEFAULT_LANGUAGE) -> JSONResponse
         detail = str(exc)
     for cls, text in _DATABASE_DETAILS.items():
         if isinstance(exc, cls):
-            logger.warning("database error answered %s: %s", status_for(exc), exc)
+            logger.warning("database error answered %s: %s", status_for(exc), _cause(exc))
             detail = text.format(s=RETRY_AFTER_S)
             break
     code = status_for(exc)
