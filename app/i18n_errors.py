@@ -115,6 +115,9 @@ ERROR_MESSAGES: Final[tuple[str, ...]] = (
     N_("sign in first, or send an API token as `Authorization: Bearer …`"),
     N_("must be {low} to {high} characters long"),
     N_("{name} was just taken; choose another"),
+    N_("no user called {name}; give a password to make one"),
+    N_("the organisation would have no owner left; make another first"),
+    N_("a device token belongs to one organisation"),
     # stored objects
     N_("field {id} not found"),
     N_("token {id} not found"),

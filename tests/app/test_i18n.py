@@ -176,3 +176,24 @@ def test_translate_detail(detail: str, expected: str | None) -> None:
 def test_error_templates_are_whole_sentences_with_named_placeholders() -> None:
     for template in ERROR_MESSAGES:
         assert "{}" not in template and "%" not in template, template
+
+
+@pytest.mark.parametrize(
+    ("detail", "expected"),
+    [
+        (
+            "role: the organisation would have no owner left; make another first",
+            "role: organisasi ini tidak akan punya pemilik lagi; jadikan anggota lain pemilik dulu",
+        ),
+        (
+            "username: no user called 'sari'; give a password to make one",
+            "username: tidak ada pengguna bernama 'sari'; berikan kata sandi untuk membuatnya",
+        ),
+        (
+            "organisation: a device token belongs to one organisation",
+            "organisation: token perangkat hanya milik satu organisasi",
+        ),
+    ],
+)
+def test_a_cooperatives_member_errors_are_in_indonesian(detail: str, expected: str) -> None:
+    assert translate_detail(detail, "id") == expected
