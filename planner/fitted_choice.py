@@ -172,8 +172,12 @@ def choose_convex(
         return one
 
     def way_round(picked: FittedChoice) -> FittedChoice:
-        # With a turning radius, R5 within the heading too (cover_first_way).
+        # With a turning radius, R5 within the heading too (cover_first_way). Not beyond
+        # _FIT_ALTERNATIVES_MAX_LINES lines: four more fits would double a large field's
+        # time (the budget), and there the way round moves a line end among hundreds.
         if vehicle.min_turn_radius_m <= 0.0 or pattern == "snake":
+            return picked
+        if len(picked.chosen.fit.u) > _FIT_ALTERNATIVES_MAX_LINES:
             return picked
         return cover_first_way(picked, fitted_many, area, objective)
 

@@ -89,10 +89,42 @@ def band_m2(
     ends = np.searchsorted(ring, np.arange(len(rings)), side="right").astype(np.int64)
     exterior = np.concatenate([[True], part[1:] != part[:-1]])
     signs = np.where(exterior, 1.0, -1.0) * np.where(polygon[part] == 0, 1.0, -1.0)
-    ring_u, ring_v = to_sweep(xy[:, 0], xy[:, 1], heading)
     u = u[keep]
+    if len(u) * len(xy) > BAND_KERNEL_MAX_WORK:
+        return _band_by_overlay(u, lo[keep], hi[keep], field_local, area, heading, width_m)
+    ring_u, ring_v = to_sweep(xy[:, 0], xy[:, 1], heading)
     return float(
         boxes_over_rings_m2(u - half, u + half, lo[keep], hi[keep], ring_u, ring_v, ends, signs)
+    )
+
+
+#: Boxes times ring vertices beyond which the band is measured by shapely's overlay: the
+#: kernel visits every ring edge for every rectangle (a 1,999-vertex wavy boundary's band
+#: took it 1.3 s, the overlay about 0.2 s); on the real fields it is 4 times faster.
+BAND_KERNEL_MAX_WORK = 200_000
+
+
+def _band_by_overlay(
+    u: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    field_local: Polygon | MultiPolygon,
+    area: Polygon | MultiPolygon,
+    heading: float,
+    width_m: float,
+) -> float:
+    """:func:`band_m2` by shapely: the boxes' union, inside the field less inside ``area``."""
+    boxes = footprint_boxes(u, lo, hi, heading, width_m)
+    shapely.prepare(area)
+    out = boxes[~shapely.contains(area, boxes)]
+    if not len(out):
+        return 0.0
+    try:
+        reach = shapely.union_all(out)
+    except shapely.errors.GEOSException:  # near-degenerate boxes GEOS refuses unsnapped
+        reach = shapely.union_all(out, grid_size=UNION_GRID_M)
+    return float(
+        shapely.intersection(field_local, reach).area - shapely.intersection(area, reach).area
     )
 
 

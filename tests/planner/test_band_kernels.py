@@ -5,6 +5,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely import MultiPolygon, Polygon
 
+from planner import footprints
 from planner.cell_plans import plan_heading
 from planner.cell_route import fit_cells
 from planner.footprints import FloatArray, band_m2, cell_lines, footprint_boxes
@@ -88,3 +89,19 @@ def test_band_of_fitted_lines_on_real_fields(name: str, heading: float) -> None:
     theirs = shapely_band_m2(u, lo, hi, field, area, heading, d)
     assert theirs > 1.0
     assert ours == pytest.approx(theirs, rel=1e-9)
+
+
+def test_a_band_too_large_for_the_kernel_is_measured_by_the_overlay(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Above BAND_KERNEL_MAX_WORK the overlay measures the band; both agree."""
+    field = Polygon(
+        [(0, 0), (40, 0), (40, 30), (0, 30)], [[(15, 10), (25, 10), (25, 20), (15, 20)]]
+    )
+    area = field.buffer(-0.6, join_style="mitre")
+    u, lo, hi = np.array([1.0, 39.0]), np.array([0.5, 0.5]), np.array([29.5, 29.5])
+    by_kernel = footprints.band_m2(u, lo, hi, field, area, 0.0, 4.0)
+    monkeypatch.setattr(footprints, "BAND_KERNEL_MAX_WORK", 0)
+    by_overlay = footprints.band_m2(u, lo, hi, field, area, 0.0, 4.0)
+    assert by_kernel > 0.0
+    assert by_overlay == pytest.approx(by_kernel, rel=1e-9)
