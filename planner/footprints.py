@@ -91,7 +91,8 @@ def band_m2(
     signs = np.where(exterior, 1.0, -1.0) * np.where(polygon[part] == 0, 1.0, -1.0)
     u = u[keep]
     if len(u) * len(xy) > BAND_KERNEL_MAX_WORK:
-        return _band_by_overlay(u, lo[keep], hi[keep], field_local, area, heading, width_m)
+        boxes = footprint_boxes(u, lo[keep], hi[keep], heading, width_m)
+        return _band_by_overlay(boxes, field_local, area)
     ring_u, ring_v = to_sweep(xy[:, 0], xy[:, 1], heading)
     return float(
         boxes_over_rings_m2(u - half, u + half, lo[keep], hi[keep], ring_u, ring_v, ends, signs)
@@ -105,16 +106,11 @@ BAND_KERNEL_MAX_WORK = 200_000
 
 
 def _band_by_overlay(
-    u: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
+    boxes: npt.NDArray[np.object_],
     field_local: Polygon | MultiPolygon,
     area: Polygon | MultiPolygon,
-    heading: float,
-    width_m: float,
 ) -> float:
-    """:func:`band_m2` by shapely: the boxes' union, inside the field less inside ``area``."""
-    boxes = footprint_boxes(u, lo, hi, heading, width_m)
+    """:func:`band_m2` by shapely: the ``boxes``' union, inside the field less inside ``area``."""
     shapely.prepare(area)
     out = boxes[~shapely.contains(area, boxes)]
     if not len(out):
