@@ -282,7 +282,14 @@ class _TurnStore:
         """Slots of the turns from line ``first`` to line ``second``, fitting any new ones."""
         keys = (first * self._n + second).tolist()
         slot = self._slot
-        new = [i for i, key in enumerate(keys) if key not in slot]
+        # The first round's pairs (each line and its next) are distinct and all new: their
+        # slots are 0, 1, ... without a look-up per pair.
+        everything_new = not slot
+        new = (
+            list(range(len(keys)))
+            if everything_new
+            else [i for i, key in enumerate(keys) if key not in slot]
+        )
         if new:
             pick = np.asarray(new, dtype=np.int64)
             planned = None
@@ -302,6 +309,8 @@ class _TurnStore:
             self.shift_end_m = np.concatenate([self.shift_end_m, shift_end_m])
             self.shift_start_m = np.concatenate([self.shift_start_m, shift_start_m])
             self.fits = np.concatenate([self.fits, fits])
+        if everything_new:
+            return np.arange(len(keys), dtype=np.int64)
         return np.fromiter((slot[key] for key in keys), dtype=np.int64, count=len(keys))
 
     def take(self, ids: IntArray) -> TurnCurves:
