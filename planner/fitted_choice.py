@@ -141,29 +141,37 @@ def choose_convex(
     """
     area = float(field_local.area)
     machine: Polygon | None = None
+    # Every heading and variant fitted so far: a fit depends on nothing else (fit_headings
+    # plans each heading's turns as it would alone), so none is fitted twice (the way round
+    # fits the chosen heading's own variant again).
+    known: dict[tuple[float, int], FittedHeading | InvalidParameterError] = {}
 
     def fitted_many(
         headings: Sequence[float], variants: Sequence[int]
     ) -> list[FittedHeading | InvalidParameterError]:
         nonlocal machine
-        if machine is None:  # where the path may run: the same at every heading
-            machine = convex_machine_area(field_local, vehicle)
-        fits = fit_headings(
-            field_local,
-            headings,
-            variants,
-            interval_m=interval_m,
-            implement_width_m=implement_width_m,
-            vehicle=vehicle,
-            pattern=pattern,
-            area=machine,
-        )
-        return [
-            fit
-            if isinstance(fit, InvalidParameterError)
-            else FittedHeading(h, fit[0], fit[1], _length_m(fit[0], h, start_xy, finish_xy))
-            for h, fit in zip(headings, fits, strict=True)
-        ]
+        wanted = [(float(h), int(k)) for h, k in zip(headings, variants, strict=True)]
+        new = list(dict.fromkeys(w for w in wanted if w not in known))
+        if new:
+            if machine is None:  # where the path may run: the same at every heading
+                machine = convex_machine_area(field_local, vehicle)
+            fits = fit_headings(
+                field_local,
+                [h for h, _ in new],
+                [k for _, k in new],
+                interval_m=interval_m,
+                implement_width_m=implement_width_m,
+                vehicle=vehicle,
+                pattern=pattern,
+                area=machine,
+            )
+            for (h, k), fit in zip(new, fits, strict=True):
+                known[h, k] = (
+                    fit
+                    if isinstance(fit, InvalidParameterError)
+                    else FittedHeading(h, fit[0], fit[1], _length_m(fit[0], h, start_xy, finish_xy))
+                )
+        return [known[w] for w in wanted]
 
     def fitted(heading: float, variant: int) -> FittedHeading:
         (one,) = fitted_many([heading], [variant])
@@ -293,7 +301,7 @@ def choose_convex(
                 checked.append(candidate)
                 best_m2 = max(best_m2, candidate.covered_m2)
                 beyond = max(beyond, candidate.covered_m2 / area - estimate)
-            block *= 2
+            block = min(2 * block, _BLOCK_MAX)
         if not checked:
             assert error is not None
             raise error
@@ -486,8 +494,12 @@ _ESTIMATE_ABOVE = 2.0
 #: Headings are fitted while their estimate, plus the largest error seen and this many times
 #: the slack, could beat the best fitted coverage.
 _UNSEEN_ERROR = 2.0
-#: Headings fitted in the first block of that check; each next block is twice as large.
+#: Headings fitted in the first block of that check; each next block is twice as large, up to
+#: :data:`_BLOCK_MAX`. Which headings are checked does not depend on the blocks (each is
+#: replayed in order): they only trade calls against headings fitted beyond the one that
+#: ends the check (a block of 64 on a real field: 56 of them fitted for nothing).
 _FIRST_BLOCK = 8
+_BLOCK_MAX = 32
 
 
 def _key(planned: FittedHeading, objective: Objective) -> tuple[float, float, float]:

@@ -34,3 +34,27 @@ def test_a_convex_plan_is_driven_the_way_round_that_covers_most(feature_id: str)
     )  # fmt: skip
     best_ratio = max(way[1] for way in ways if not isinstance(way, Exception)) / local.area
     assert plan.stats.coverage_ratio >= best_ratio - PARITY_SLACK_SHARE - 1e-9
+
+
+def test_no_heading_is_fitted_twice(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The way round reuses the chosen heading's fit, and a check fits at most 32 at once.
+
+    germany_2018_2019-25 comes to the way round after fitting its scored headings; before, the
+    chosen heading and variant were fitted again there.
+    """
+    from planner import fitted_choice
+
+    calls: list[list[tuple[float, int]]] = []
+
+    def counted(field, headings, variants, **kwargs):  # type: ignore[no-untyped-def]
+        calls.append(list(zip(map(float, headings), map(int, variants), strict=True)))
+        return fit_headings(field, headings, variants, **kwargs)
+
+    monkeypatch.setattr(fitted_choice, "fit_headings", counted)
+    feature = shared_feature(FIELDS_DIR / "germany_2018_2019.geojson", "germany_2018_2019-25")
+    field, _ = validation.validate_field(shapely.from_geojson(json.dumps(feature["geometry"])))
+    plan_coverage(field, interval_m=4.0, vehicle="small_tractor")
+    fitted = [pair for call in calls for pair in call]
+    assert len(calls) > 2, "the premise: the plan was checked on fitted headings"
+    assert len(fitted) == len(set(fitted))
+    assert max(len(call) for call in calls) <= fitted_choice._BLOCK_MAX
