@@ -185,12 +185,13 @@ def _laid_out(
 
     ``packed`` holds each cell's ``Chains.packed`` in turn. Returns whether the kernel could
     vouch for the result (False: NaN, or keys out of order), the odd cells in order
-    (measured on their own by the caller), each piece's three areas and each piece's cell.
+    (measured on their own by the caller), each piece's three areas end to end (flat, so the
+    screen sums them without a copy) and each piece's cell.
     """
     cells = len(offsets) - 1
     n = len(u)
     half = d / 2.0
-    no_area, no_cell = np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
+    no_area, no_cell = np.zeros(0), np.zeros(0, dtype=np.int64)
     odd_cell = np.zeros(cells, dtype=np.bool_)
     sizes = np.empty((cells, 2), dtype=np.int64)
     n_lo, n_hi, p = 0, 0, 0
@@ -294,7 +295,8 @@ def _laid_out(
             j += 1
     # np.argsort(kind="stable") of the starts: both runs are in order (lines left to right),
     # so merge them, the first run first on a tie; else an insertion sort.
-    if _sorted(r0[:kept]) and _sorted(r0[kept:]):
+    merged = _sorted(r0[:kept]) and _sorted(r0[kept:])
+    if merged:
         order = np.empty(strips, dtype=np.int64)
         i, j = 0, kept
         for q in range(strips):
@@ -315,7 +317,10 @@ def _laid_out(
                 order[at] = order[at - 1]
                 at -= 1
             order[at] = key
-    s0s, s1s, a_s, b_s = r0[order], r1[order], r_a[order], r_b[order]
+    if merged and kept == strips:  # no overlaps: the merge keeps the lines' order
+        s0s, s1s, a_s, b_s = r0, r1, r_a, r_b
+    else:
+        s0s, s1s, a_s, b_s = r0[order], r1[order], r_a[order], r_b[order]
     # The cuts: np.unique of the chains and the strips' ends (all sorted, so merged).
     if not (_sorted(s0s) and _sorted(s1s)):
         if not _sorted(s0s):
@@ -331,7 +336,7 @@ def _laid_out(
         if cuts[i] != cuts[m - 1]:
             cuts[m] = cuts[i]
             m += 1
-    area = np.empty((max(m - 1, 0), 3))
+    area = np.empty(3 * max(m - 1, 0))
     cell_of = np.empty(max(m - 1, 0), dtype=np.int64)
     pieces = 0
     # Walk the sorted keys: the number at or below mid is searchsorted(side="right").
@@ -352,12 +357,12 @@ def _laid_out(
             continue
         lo0, lo1 = _edge(lo_x, lo_v, lo_start[c], lo_start[c + 1], p_lo - 1, left, right)
         hi0, hi1 = _edge(hi_x, hi_v, hi_start[c], hi_start[c + 1], p_hi - 1, left, right)
-        area[pieces, 0], area[pieces, 1], area[pieces, 2] = _piece_area(
+        area[3 * pieces], area[3 * pieces + 1], area[3 * pieces + 2] = _piece_area(
             right - left, lo0, lo1, hi0, hi1, a_s[k], b_s[k]
         )
         cell_of[pieces] = c
         pieces += 1
-    return True, odd, area[:pieces], cell_of[:pieces]
+    return True, odd, area[: 3 * pieces], cell_of[:pieces]
 
 
 def packed_chains(u_ring: FloatArray, v_ring: FloatArray) -> tuple[int, int, FloatArray] | None:
@@ -394,7 +399,7 @@ def laid_out(
         np.ascontiguousarray(v_hi, dtype=np.float64),
         float(interval_m),
     )
-    return (odd, area, cell) if ok else None
+    return (odd, area.reshape(-1, 3), cell) if ok else None
 
 
 def warm_up() -> None:
