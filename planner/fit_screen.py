@@ -116,7 +116,7 @@ def turn_table(vehicle: Vehicle, spacing_m: float) -> TurnTable:
     index = np.arange(len(curves.xy))
     last = np.zeros(len(index), dtype=bool)
     last[curves.offsets[1:] - 1] = True
-    owner = np.repeat(np.arange(len(starts)), np.diff(curves.offsets))
+    owner = np.repeat(np.arange(len(starts)), curves.point_counts())
     kept = ((index - curves.offsets[owner]) % SUBSAMPLE == 0) | last
     counts = np.bincount(owner[kept], minlength=len(starts))
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)

@@ -34,7 +34,7 @@ def fitted_numpy(
     """
     # Array methods and slices rather than np.repeat/np.diff/…: the wrappers cost more than
     # the work on a few turns.
-    owner = np.arange(len(top)).repeat(curves.offsets[1:] - curves.offsets[:-1])
+    owner = np.arange(len(top)).repeat(curves.point_counts())
     pu, pv = curves.xy[:, 0], curves.xy[:, 1]
     hi = np.interp(pu, machine.hi_u, machine.hi_v)
     lo = np.interp(pu, machine.lo_u, machine.lo_v)

@@ -429,7 +429,7 @@ class _Joiner:
         ends = TurnEnds(dep_xy[:, 0], dep_xy[:, 1], dep_yaw, to_xy[:, 0], to_xy[:, 1], to_yaw)
         curves = dubins_turn(ends, radius_m=self.radius)
         inside = shapely.contains_xy(self.allowed, curves.xy[:, 0], curves.xy[:, 1])
-        owner = np.repeat(np.arange(len(curves)), np.diff(curves.offsets))
+        owner = np.repeat(np.arange(len(curves)), curves.point_counts())
         bad = np.zeros(len(curves), dtype=bool)
         np.logical_or.at(bad, owner, ~inside)
         cost = np.where(bad, np.inf, curves.length_m + along)

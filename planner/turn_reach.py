@@ -34,7 +34,7 @@ def side_reach_m(vehicle: Vehicle, spacings_m: tuple[float, ...]) -> float:
     zero = np.zeros(len(s))
     ends = TurnEnds(zero, zero, zero + math.pi / 2.0, s, zero, zero - math.pi / 2.0)
     curves = vehicle_turns(ends, vehicle)
-    owner = np.repeat(np.arange(len(s)), np.diff(curves.offsets))
+    owner = np.repeat(np.arange(len(s)), curves.point_counts())
     beyond = np.maximum(-curves.xy[:, 0], curves.xy[:, 0] - s[owner])
     return float(max(beyond.max(initial=0.0), 0.0))
 
@@ -128,7 +128,7 @@ def _pull_back_table(vehicle: Vehicle, spacing_m: float) -> FloatArray:
             zero - math.pi / 2.0,
         )
         curves = vehicle_turns(ends, vehicle)
-        owner = np.repeat(np.arange(k), np.diff(curves.offsets))
+        owner = np.repeat(np.arange(k), curves.point_counts())
         above = curves.xy[:, 1] - sense * slopes[owner] * curves.xy[:, 0]
         need = np.full(k, -np.inf)
         np.maximum.at(need, owner, above)

@@ -179,7 +179,7 @@ def driving_time_numpy(
 def translate_numpy(shapes: TurnCurves, shape_of: IntArray | None, ends: TurnEnds) -> TurnCurves:
     """:func:`planner.turns._translate` in numpy: the compiled kernel's reference."""
     curves = shapes if shape_of is None else take_turns(shapes, shape_of)
-    owner = np.arange(len(curves)).repeat(curves.offsets[1:] - curves.offsets[:-1])
+    owner = np.arange(len(curves)).repeat(curves.point_counts())
     xy = curves.xy
     xy[:, 0] += ends.x0[owner]
     xy[:, 1] += ends.y0[owner]

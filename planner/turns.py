@@ -107,6 +107,14 @@ class TurnCurves:
         """Return the number of turns."""
         return len(self.offsets) - 1
 
+    def point_counts(self) -> IntArray:
+        """Points of each turn, shape (T,).
+
+        ``np.diff(offsets)``'s values, by slices subtracted: without its overhead on a few
+        turns (called every fitting round).
+        """
+        return self.offsets[1:] - self.offsets[:-1]
+
 
 def pivot_turn(
     ends: TurnEnds, *, track_m: float, can_reverse: bool = False, step_m: float = STEP_M
@@ -282,7 +290,7 @@ def turn_depth_m(
     curves: TurnCurves, x0: FloatArray, y0: FloatArray, yaw0: FloatArray
 ) -> FloatArray:
     """How far each turn reaches beyond its start, along the start heading [m]."""
-    k = np.repeat(np.arange(len(curves)), np.diff(curves.offsets))
+    k = np.repeat(np.arange(len(curves)), curves.point_counts())
     along = (curves.xy[:, 0] - x0[k]) * np.cos(yaw0[k]) + (curves.xy[:, 1] - y0[k]) * np.sin(
         yaw0[k]
     )
@@ -476,8 +484,7 @@ def no_turns(vehicle: Vehicle) -> TurnCurves:
 
 def take_turns(curves: TurnCurves, ids: IntArray) -> TurnCurves:
     """Return the turns ``ids`` of ``curves`` (any order, repeats allowed), as a new array."""
-    # Slices subtracted, not np.diff: the same sizes without its overhead (called per round).
-    sizes = (curves.offsets[1:] - curves.offsets[:-1])[ids]
+    sizes = curves.point_counts()[ids]
     offsets = np.zeros(len(ids) + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
     point = np.repeat(curves.offsets[ids] - offsets[:-1], sizes) + np.arange(offsets[-1])
@@ -537,7 +544,7 @@ def _subset(ends: TurnEnds, keep: npt.NDArray[np.bool_]) -> TurnEnds:
 def _merge(a: TurnCurves, b: TurnCurves, from_a: npt.NDArray[np.bool_]) -> TurnCurves:
     """Interleave two sets of turns: turn ``k`` from ``a`` where ``from_a[k]``, else ``b``."""
     n = len(from_a)
-    size_a, size_b = a.offsets[1:] - a.offsets[:-1], b.offsets[1:] - b.offsets[:-1]
+    size_a, size_b = a.point_counts(), b.point_counts()
     sizes = np.empty(n, dtype=np.int64)
     sizes[from_a], sizes[~from_a] = size_a, size_b
     offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
