@@ -10,8 +10,9 @@ user would). ``--cases`` measures that test file's own cases instead.
 Per field it prints the *coverage shortfall*: the best fixed heading's ``coverage_ratio``
 minus the searched plan's, minus R5's 0.2 pp slack, floored at 0 [pp] (target: 0 on every
 field); and the *length excess*: the searched plan's ``path_length_m`` over the shortest
-fixed heading within 0.2 pp of the best coverage, the searched plan's included (as the
-test counts it) [%] (target: ≤ 1 %). Then the counts.
+fixed heading within 0.2 pp of the best coverage, the searched plan's included, and the
+heading it reports giving coverage up against (as the test counts it) [%] (target: ≤ 1 %).
+Then the counts.
 The default hand tractor. Not part of ``make bench`` (about 5 s of CPU a field).
 
 ``--fixed-cache DIR`` keeps each field's 180 fixed-heading figures (heading, coverage,
@@ -116,9 +117,11 @@ def compare(
     fixed = fixed_figures(field, interval_m, vehicle, cache)
     heading, cover, length = fixed.T
     best = int(np.argmax(cover))  # the first of equals, as max() over the headings
-    # As the test does: where the search found a heading between the 1° ones that covers more,
-    # a 1° heading 0.2 pp below it is no candidate.
-    top_cover = max(float(cover[best]), searched.coverage_ratio)
+    # As the test does: where the search found a heading between the 1° ones that covers more
+    # (the plan's own, or one it gave coverage up against), a 1° heading 0.2 pp below it is no
+    # candidate.
+    found = searched.coverage_ratio + searched.coverage_given_up_pp / 100.0
+    top_cover = max(float(cover[best]), found)
     keeping = np.flatnonzero(cover >= top_cover - COVERAGE_SLACK)
     if len(keeping):
         shortest = int(keeping[np.argmin(length[keeping])])

@@ -8,7 +8,8 @@ as :mod:`bench.heading_brute_force_non_convex` does on star fields:
 - the *coverage shortfall*: the best fixed heading's ``coverage_ratio`` minus the searched
   plan's, minus R5's 0.2 pp slack, floored at 0 [pp] (target: 0 on every field);
 - the *length excess*: the searched plan's ``path_length_m`` over the shortest fixed heading
-  within 0.2 pp of the best coverage (the searched plan's included) [%] (target: ≤ 1 %).
+  within 0.2 pp of the best coverage (the searched plan's included, and the one it reports
+  giving coverage up against) [%] (target: ≤ 1 %).
 
 It prints the fields that miss either target, then the counts. VEHICLE defaults to
 ``hand_tractor``. The fields are shared among ``--workers`` processes (default 2); about 7

@@ -61,7 +61,7 @@ REAL_CASES = [
     pytest.param("germany_2018_2019", "germany_2018_2019-1", "small_tractor", id="germany-1-small"),
     # Known gap (issue 9, R5): with a turning radius the fitted screen errs by a few tenths
     # of a pp between headings (``python -m bench.heading_brute_force_real small_tractor``:
-    # 6 of 223 real fields short of the rule, worst 0.54 pp beyond the slack, this one).
+    # 6 of 223 real fields short of the rule, worst 0.32 pp beyond the slack; this one 0.17).
     pytest.param(
         "germany_2018_2019",
         "germany_2018_2019-5",
@@ -89,8 +89,10 @@ def assert_rule(field: Polygon, interval_m: float, vehicle: str) -> None:
         f"{best.angle_deg:.1f}° {best.coverage_ratio:.5f}"
     )
     # The rule is relative to the best heading: where the search found one between the 1°
-    # headings that covers more, a 1° heading 0.2 pp below it is no candidate.
-    best_coverage = max(best.coverage_ratio, searched.stats.coverage_ratio)
+    # headings that covers more, a 1° heading 0.2 pp below it is no candidate. That heading
+    # may not be the plan's: the plan reports what it gave up against it (R5).
+    found = searched.stats.coverage_ratio + searched.stats.coverage_given_up_pp / 100.0
+    best_coverage = max(best.coverage_ratio, found)
     keeping = [s for s in fixed if s.coverage_ratio >= best_coverage - angles.COVERAGE_SLACK]
     if not keeping:
         return  # no 1° heading keeps the rule: the searched plan is the only candidate
