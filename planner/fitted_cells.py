@@ -325,7 +325,8 @@ def choose_cells(
 #: Headings fitted because the decomposed estimate ranks them best for coverage (R5). Two left
 #: 3 of 223 real fields at 4 m with the hand tractor and 3 of 25 star fields short of the rule
 #: against a 1° brute force; three leave 1 (0.01 pp beyond the slack) and none, for about 5 %
-#: more planning time (issue 9 item 5, measured in its closing note of 2026-12-05).
+#: more planning time (``python -m bench.heading_brute_force_real``, ``python -m
+#: bench.heading_brute_force_non_convex``, ``python -m bench.plan_times``).
 COVER_FITS = 3
 
 
