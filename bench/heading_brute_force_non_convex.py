@@ -1,7 +1,7 @@
 """How far the non-convex heading search is from a 1° brute force (R5, issue 9 item 5).
 
-``python -m bench.heading_brute_force_non_convex [FIELDS] [--cases]`` plans each of a seeded
-draw of star fields with holes (:func:`star_jobs`: the fields of
+``python -m bench.heading_brute_force_non_convex [FIELDS] [--cases] [--fixed-cache DIR]``
+plans each of a seeded draw of star fields with holes (:func:`star_jobs`: the fields of
 ``tests/planner/test_heading_rule_non_convex.py``, drawn the way its cases are: 5–16
 vertices, 1–3 holes asked for, 50–500 m, intervals a tenth to a fortieth of the size) once
 with the heading searched and 180 times at a fixed heading, every 1° (``angle_deg``, as a
@@ -24,8 +24,8 @@ ranked or fitted, not to how a heading is planned): empty ``DIR`` after any othe
 
 from __future__ import annotations
 
+import argparse
 import math
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -140,24 +140,16 @@ def compare(
     )
 
 
-def _cache_dir() -> Path | None:
-    """``--fixed-cache DIR`` of the command line, if given."""
-    for k, arg in enumerate(sys.argv):
-        if arg == "--fixed-cache" and k + 1 < len(sys.argv):
-            return Path(sys.argv[k + 1])
-        if arg.startswith("--fixed-cache="):
-            return Path(arg.split("=", 1)[1])
-    return None
-
-
 def main() -> None:
-    cache_dir = _cache_dir()
-    args = [
-        a
-        for a in sys.argv[1:]
-        if not a.startswith("--") and (cache_dir is None or a != str(cache_dir))
-    ]
-    jobs = TEST_CASES if "--cases" in sys.argv else star_jobs(int(args[0]) if args else 25)
+    parser = argparse.ArgumentParser(prog="python -m bench.heading_brute_force_non_convex")
+    parser.add_argument("fields", nargs="?", type=int, default=25, help="star fields drawn")
+    parser.add_argument("--cases", action="store_true", help="the test file's cases instead")
+    parser.add_argument(
+        "--fixed-cache", type=Path, default=None, help="keep the fixed-heading figures here"
+    )
+    args = parser.parse_args()
+    cache_dir = args.fixed_cache
+    jobs = TEST_CASES if args.cases else star_jobs(args.fields)
     started = time.process_time()
     outcomes = []
     for k, job in enumerate(jobs):
