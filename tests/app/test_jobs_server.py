@@ -69,6 +69,22 @@ def test_a_running_job_survives_a_restart_and_completes_once(
     engine.dispose()
 
 
+def command_line(process: psutil.Process) -> str:
+    """The process's command line, or "" once it has exited (a zombie has none to read)."""
+    try:
+        return " ".join(process.cmdline())
+    except psutil.Error:
+        return ""
+
+
+def children(process: psutil.Process, *, recursive: bool = False) -> list[psutil.Process]:
+    """The process's children, none once it has exited."""
+    try:
+        return process.children(recursive=recursive)
+    except psutil.Error:
+        return []
+
+
 def test_the_local_cluster_starts_and_stops_with_the_server(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ):
@@ -82,12 +98,14 @@ def test_the_local_cluster_starts_and_stops_with_the_server(
         # loaded the planner (app.preload).
         deadline = time.monotonic() + 60
         while True:
+            # Short-lived helpers come and go meanwhile: one that has just exited is a
+            # zombie whose command line cannot be read (psutil.ZombieProcess under load).
             started = [p for p in me.children(recursive=True) if p.pid not in before]
-            forkservers = [p for p in started if "forkserver" in " ".join(p.cmdline())]
-            workers = [c for f in forkservers for c in f.children()]
+            forkservers = [p for p in started if "forkserver" in command_line(p)]
+            workers = [c for f in forkservers for c in children(f)]
             if len(workers) >= 2 or time.monotonic() > deadline:
                 break
             time.sleep(0.2)
-        assert len(workers) >= 2, [p.cmdline() for p in started]
+        assert len(workers) >= 2, [command_line(p) for p in started]
     _gone, alive = psutil.wait_procs(started, timeout=15)
-    assert alive == [], [p.cmdline() for p in alive]
+    assert alive == [], [command_line(p) for p in alive]
