@@ -3,10 +3,10 @@
 Seeded random shapes (:func:`star_field`, :func:`random_convex_jobs`), a local shape put on
 Earth (:func:`field_from_local`), the plans of one field at fixed headings
 (:func:`fixed_heading_figures`) and the non-convex heading rule's cases
-(:data:`NON_CONVEX_CASES`, :data:`LOSS_SHARE`). They live here, not in ``tests/``, so that a
-bench measures the very fields a test checks without importing the tests; the tests import
-them from here (``tests/conftest.py``, ``tests/planner/random_fields.py`` and
-``tests/planner/plan_checks.py`` pass them on).
+(:data:`NON_CONVEX_CASES`; the rule's measure is :mod:`bench.heading_rule`). They live here,
+not in ``tests/``, so that a bench measures the very fields a test checks without importing
+the tests; the tests import them from here (``tests/conftest.py``,
+``tests/planner/random_fields.py`` and ``tests/planner/plan_checks.py`` pass them on).
 """
 
 from __future__ import annotations
@@ -38,8 +38,6 @@ NON_CONVEX_CASES: dict[str, tuple[int, int, float, int, float]] = {
     "13-gon-was-1.4pct": (13, 4110225764, 202.1527627324664, 3, 11.82),
     "16-gon-was-4.3pct": (16, 401347228, 401.4893937441768, 1, 40.07),
 }
-#: The searched plan may be this much longer than the best fixed heading that keeps the rule.
-LOSS_SHARE = 0.01
 
 
 def field_from_local(
