@@ -39,7 +39,7 @@ def excess_pct(job: tuple, vehicle: str = "hand_tractor") -> tuple[float, float]
         searched = plan_coverage(field, **kwargs).stats
     except PlannerError:
         return None
-    lengths, cover = fixed_heading_figures(field, GRID_DEG.tolist(), **kwargs)
+    _, lengths, cover = fixed_heading_figures(field, GRID_DEG.tolist(), **kwargs)
     eligible = cover >= cover.max() - COVERAGE_SLACK - 1e-9
     best = float(lengths[eligible].min())
     shortfall_pp = max(float(cover.max()) - searched.coverage_ratio - COVERAGE_SLACK, 0.0) * 100

@@ -25,16 +25,14 @@ from pathlib import Path
 import numpy as np
 from shapely import Polygon
 
+from bench.shapes import fixed_heading_figures
 from planner import plan_coverage
 from planner.angles import COVERAGE_SLACK
-from planner.errors import PlannerError
 
 #: The 1° grid of fixed headings [deg].
 GRID_DEG = np.arange(0.0, 180.0, 1.0)
-#: The searched plan may be this much longer than the best fixed heading that keeps the rule.
-LOSS_SHARE = 0.01
-#: :data:`LOSS_SHARE` in per cent.
-LOSS_PCT = LOSS_SHARE * 100.0
+#: The searched plan may be this much longer than the best fixed heading that keeps the rule [%].
+LOSS_PCT = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,21 +81,16 @@ def fixed_figures(
 ) -> np.ndarray:
     """Plan ``field`` at every heading of :data:`GRID_DEG`: rows (heading, coverage, length).
 
-    A fixed heading the planner refuses (too many lines for it, or too narrow there for the
-    vehicle) is left out; a bug still raises. With ``cache`` (a ``.npy`` file), the rows are
-    read from it if it exists and written to it if not: only right while every fixed-heading
-    plan is unchanged.
+    :func:`bench.shapes.fixed_heading_figures` (a heading the planner refuses is left out).
+    With ``cache`` (a ``.npy`` file), the rows are read from it if it exists and written to it
+    if not: only right while every fixed-heading plan is unchanged.
     """
     if cache is not None and cache.exists():
         return np.asarray(np.load(cache), dtype=float)
-    rows = []
-    for h in GRID_DEG.tolist():
-        try:
-            s = plan_coverage(field, interval_m=interval_m, vehicle=vehicle, angle_deg=h).stats
-        except PlannerError:
-            continue
-        rows.append((s.angle_deg, s.coverage_ratio, s.path_length_m))
-    figures = np.array(rows, dtype=float).reshape(-1, 3)
+    headings, lengths, covers = fixed_heading_figures(
+        field, GRID_DEG.tolist(), interval_m=interval_m, vehicle=vehicle
+    )
+    figures = np.stack([headings, covers, lengths], axis=1)
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         np.save(cache, figures)

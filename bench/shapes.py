@@ -136,18 +136,20 @@ def _maybe_point(rng: np.random.Generator, frame: object, reach_m: float) -> tup
 
 def fixed_heading_figures(
     field: Polygon, headings_deg: list[float], **options: Any
-) -> tuple[np.ndarray, np.ndarray]:
-    """Path length [m] and coverage ratio of the field planned at each fixed heading.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The field planned at each fixed heading: the headings planned, path lengths, coverages.
 
-    The brute force that judges the heading search (R5, issue 9 item 5); headings at which
-    the vehicle cannot plan the field are left out of both arrays.
+    The brute force that judges the heading search (R5, issue 9 item 5): heading [deg], path
+    length [m] and coverage ratio; headings at which the vehicle cannot plan the field (too
+    many lines, too narrow for it) are left out of all three arrays; a bug still raises.
     """
-    lengths, covers = [], []
+    planned, lengths, covers = [], [], []
     for heading in headings_deg:
         try:
             stats = plan_coverage(field, angle_deg=heading, **options).stats
         except PlannerError:
             continue
+        planned.append(stats.angle_deg)
         lengths.append(stats.path_length_m)
         covers.append(stats.coverage_ratio)
-    return np.asarray(lengths), np.asarray(covers)
+    return np.asarray(planned), np.asarray(lengths), np.asarray(covers)

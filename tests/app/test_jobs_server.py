@@ -77,10 +77,10 @@ def command_line(process: psutil.Process) -> str:
         return ""
 
 
-def children(process: psutil.Process, *, recursive: bool = False) -> list[psutil.Process]:
+def children(process: psutil.Process) -> list[psutil.Process]:
     """The process's children, none once it has exited."""
     try:
-        return process.children(recursive=recursive)
+        return process.children()
     except psutil.Error:
         return []
 

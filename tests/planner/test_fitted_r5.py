@@ -66,7 +66,7 @@ def test_searched_plan_within_five_hundredths_of_a_percent_of_a_tenth_degree_bru
     field, interval, start, finish = random_convex_jobs(field_k + 1)[field_k]
     kwargs = {"interval_m": interval, "start_lonlat": start, "finish_lonlat": finish}
     searched = plan_coverage(field, **kwargs).stats
-    lengths, cover = fixed_heading_figures(
+    _, lengths, cover = fixed_heading_figures(
         field, np.round(np.arange(0.0, 180.0, 0.1), 1).tolist(), **kwargs
     )
     keeps_rule = cover >= cover.max() - COVERAGE_SLACK - _ROUNDING

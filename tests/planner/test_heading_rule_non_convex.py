@@ -10,10 +10,10 @@ fortieth of their size, with the default vehicle (the hand tractor); and real fi
 on which the search covered over 0.2 pp less than a fixed heading (its few headings
 decomposed all missed the best-covering one).
 
-Each case plans 181 fields' worth (about 5 s a case on a quiet machine): the first few of a
-seeded draw that plan quickly, and two that a 25-field check of the search found 1.4 % and
-4.3 % longer than a fixed heading (the search fitted too few headings and compared them in a
-greedy cell order).
+Each case plans 181 fields' worth (the 15 cases: 16 s with two workers on a 2-core AMD
+EPYC). The star fields are the first few of a seeded draw that plan quickly, and two that a
+25-field check of the search found 1.4 % and 4.3 % longer than a fixed heading (the search
+fitted too few headings and compared them in a greedy cell order).
 """
 
 from __future__ import annotations
