@@ -8,8 +8,10 @@ headland passes, its lines reach the headland (:func:`reach_headland`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +23,9 @@ from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import aggregate_scan, combine_variants, variant_ends
 from planner.types import Objective
+
+if TYPE_CHECKING:  # the screen's kernels compile on first use, not on import
+    from planner.heading_screen import ScreenedCells
 
 FloatArray = npt.NDArray[np.float64]
 #: ``move_m(exits, entries)``: lengths [m] of the moves from every exit to every entry.
@@ -98,6 +103,26 @@ def cover_heading(
         [c.chains for c in cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
     )
     return CellCover(heading, cells, scan, len(scan.u), covered)
+
+
+def cover_screened(cells: ScreenedCells, heading: float, d: float) -> CellCover:
+    """:func:`cover_heading` from the cells and lines the compiled screen made at ``heading``.
+
+    They are ``cover_heading``'s bit for bit (:func:`planner.heading_screen.screened_cells`);
+    so is the cover, measured here if the screen left it unmeasured.
+    """
+    scan = LineScan(np.zeros(len(cells.rings)), cells.offsets, cells.u, cells.v_lo, cells.v_hi)
+    lines = cells.offsets.tolist()
+    cell_list = [
+        Cell(u_ring, v_ring, convex_chains(u_ring, v_ring), slice(lines[c], lines[c + 1]))
+        for c, (u_ring, v_ring) in enumerate(cells.rings)
+    ]
+    covered = cells.covered_m2
+    if math.isnan(covered):
+        covered = covered_cells(
+            [c.chains for c in cell_list], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
+        )
+    return CellCover(heading, cell_list, scan, len(scan.u), covered)
 
 
 def order_heading(

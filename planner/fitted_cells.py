@@ -15,6 +15,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -31,6 +32,9 @@ from planner.parity_kernels import parity_choice, parity_losses_m2
 from planner.turn_reach import end_reach_m
 from planner.turns import TurnEnds, vehicle_turns
 from planner.types import Objective, Pattern, Vehicle
+
+if TYPE_CHECKING:
+    from planner.heading_screen import ScreenedCovers
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
@@ -335,6 +339,13 @@ COVER_FITS = 3
 SCREENED_FITS = 24
 
 
+class CoverPicks(NamedTuple):
+    """:func:`cover_picks`' headings, and the screen of every heading it ranked them on."""
+
+    picks: list[int]
+    screen: ScreenedCovers
+
+
 def cover_picks(
     prepared: Sequence[SweepRings],
     headings_deg: FloatArray,
@@ -344,7 +355,7 @@ def cover_picks(
     turn_table: TurnTable | None = None,
     *,
     parity_slack_m2: float = math.inf,
-) -> list[int]:
+) -> CoverPicks:
     """Pick the headings to fit from the decomposed estimate at every heading (R5).
 
     The heading search's ragged scan misjudges which heading covers most by more than the
@@ -380,8 +391,10 @@ def cover_picks(
 
     Returns
     -------
-    list of int
-        Indices into ``headings_deg``, best-covering first.
+    CoverPicks
+        The picks, indices into ``headings_deg`` best-covering first, and the screen they
+        were ranked on (its cells and lines serve the plan:
+        :func:`planner.cell_plans.cover_screened`).
 
     Examples
     --------
@@ -392,7 +405,7 @@ def cover_picks(
     >>> from planner.vehicles import resolve_vehicle
     >>> ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
     >>> headings = np.array([0.0, 45.0, 90.0, 135.0])
-    >>> picks = cover_picks([sweep_rings(ell)], headings, 4.0, 2.0, resolve_vehicle(None))
+    >>> picks, _ = cover_picks([sweep_rings(ell)], headings, 4.0, 2.0, resolve_vehicle(None))
     >>> headings[picks[:2]].tolist()  # the best two
     [0.0, 90.0]
     """
@@ -401,7 +414,9 @@ def cover_picks(
     d = float(interval_m)
     _, reach_m = turn_change_m(vehicle, d)
     # With a table, the cells of the headings that may rank among the SCREENED_FITS best are
-    # kept, so that fitting them decomposes none again.
+    # kept, so that fitting them decomposes none again. Only the best are needed: the
+    # others' covers are left unmeasured (NaN).
+    needed = COVER_FITS if turn_table is None else SCREENED_FITS
     screen = screen_cells(
         prepared,
         headings_deg,
@@ -409,10 +424,13 @@ def cover_picks(
         edge_m,
         reach_m=reach_m,
         keep=0 if turn_table is None else SCREENED_FITS,
+        rank=needed,
     )
-    covered_m2, line_count, turn_count = screen.covered_m2, screen.line_count, screen.turn_count
-    # As estimate_m2; a heading the decomposition refuses is never picked.
-    estimate = np.where(line_count >= 0, covered_m2 - 2.0 * turn_count * reach_m * d, -np.inf)
+    covered_m2, turn_count = screen.covered_m2, screen.turn_count
+    # As estimate_m2; a heading the decomposition refuses, or that cannot rank, is never picked.
+    estimate = np.where(
+        np.isfinite(covered_m2), covered_m2 - 2.0 * turn_count * reach_m * d, -np.inf
+    )
     # Rounded to a µm² so that the last bits of another CPU's sums cannot reorder a tie (R7).
     estimate = np.round(estimate, 6)
     order = np.lexsort((headings_deg, -estimate))  # headings refused sort last
@@ -424,7 +442,7 @@ def cover_picks(
         order = np.concatenate(
             [screened[np.lexsort((headings_deg[screened], -rank))], order[len(screened) :]]
         )
-    return [int(a) for a in order[:COVER_FITS] if np.isfinite(estimate[a])]
+    return CoverPicks([int(a) for a in order[:COVER_FITS] if np.isfinite(estimate[a])], screen)
 
 
 def excluded_variants(

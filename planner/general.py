@@ -14,6 +14,7 @@ holes (:mod:`planner.routing`). Everything here is in local metres;
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -22,7 +23,15 @@ from shapely import Polygon
 
 from planner import angles
 from planner.cell_order import EXHAUSTIVE_MAX_CELLS
-from planner.cell_plans import CellPlan, cover_heading, order_heading, reach_headland, reorder
+from planner.cell_plans import (
+    CellCover,
+    CellPlan,
+    cover_heading,
+    cover_screened,
+    order_heading,
+    reach_headland,
+    reorder,
+)
 from planner.cell_route import CellFits, add_cells
 from planner.decomposition import sweep_rings
 from planner.edge_estimates import edge_headings
@@ -47,6 +56,9 @@ from planner.routing import FieldRouter
 from planner.turns import turning_radius_m
 from planner.types import Objective, Pattern, Vehicle
 from planner.vehicles import resolve_vehicle
+
+if TYPE_CHECKING:
+    from planner.heading_screen import ScreenedCovers
 
 __all__ = [
     "GeneralPlan",
@@ -226,7 +238,6 @@ def plan_general(
         if scores.turn_backs[ranked[0]] > MANY_TURN_BACKS:
             ranked = ranked[:1]  # a jagged boundary: hundreds of cells per heading
         prepared = [sweep_rings(p) for p in parts]
-        covers = [cover_heading(prepared, float(headings[a]), d, edge) for a in ranked]
         planned = len(ranked)
         slack_m2 = angles.COVERAGE_SLACK * float(field_local.area) + 1e-9
         # With a radius, fitted coverage depends on the heading and on which ends each cell
@@ -237,17 +248,27 @@ def plan_general(
             table = turn_table(machine, d)
         parity_slack_m2 = PARITY_SLACK_SHARE * float(field_local.area)
         must_fit: list[int] = []
+        screen: ScreenedCovers | None = None
         if len(ranked) > 1:
             # R5: the headings that the decomposed estimate of fitted coverage, at every
             # heading, ranks best-covering are fitted too (with a radius, its best are
             # screened fitted).
-            picks = cover_picks(
+            picks, screen = cover_picks(
                 prepared, headings, d, edge, machine, table, parity_slack_m2=parity_slack_m2
             )
-            extra = [a for a in picks if a not in ranked]
-            covers += [cover_heading(prepared, float(headings[a]), d, edge) for a in extra]
-            ranked += extra
+            ranked += [a for a in picks if a not in ranked]
             must_fit = [ranked.index(a) for a in picks]
+
+        def cover_at(a: int) -> CellCover:
+            # The screen decomposed and scanned every heading already, as cover_heading would.
+            from planner.heading_screen import screened_cells  # numba: compiled on first use
+
+            cells = None if screen is None else screened_cells(screen, a)
+            if cells is None:
+                return cover_heading(prepared, float(headings[a]), d, edge)
+            return cover_screened(cells, float(headings[a]), d)
+
+        covers = [cover_at(a) for a in ranked]
         orders: dict[int, CellPlan] = {}
 
         def cheap(i: int) -> CellPlan:

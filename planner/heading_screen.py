@@ -31,7 +31,7 @@ import shapely
 from planner.decomposition import SweepRings
 from planner.fit_screen import TurnTable
 from planner.screen_kernels import (
-    _SCREENED,
+    _BY_PYTHON,
     _fit_kept,
     _ring_arrays,
     _Rings,
@@ -58,6 +58,46 @@ class _Kept(NamedTuple):
     v_hi: FloatArray
 
 
+class _Staged(NamedTuple):
+    """Every heading's cells and lines as :func:`planner.screen_kernels._screen` made them."""
+
+    staged: npt.NDArray[np.bool_]
+    vertex_at: IntArray
+    size_at: IntArray
+    offset_at: IntArray
+    scan_at: IntArray
+    u: FloatArray
+    v: FloatArray
+    sizes: IntArray
+    offsets: IntArray
+    line_u: FloatArray
+    v_lo: FloatArray
+    v_hi: FloatArray
+
+
+class ScreenedCells(NamedTuple):
+    """One heading's cells and lines, as :func:`planner.cell_plans.cover_heading` makes them.
+
+    Attributes
+    ----------
+    rings : list of (ndarray, ndarray)
+        Each cell's ``(u, v)`` ring, sweep frame [m].
+    offsets : ndarray of int
+        Each cell's lines ``[offsets[c]:offsets[c + 1]]``.
+    u, v_lo, v_hi : ndarray
+        The lines (:class:`planner.lines.LineScan`'s fields).
+    covered_m2 : float
+        What they cover, NaN if the screen left it unmeasured [m²].
+    """
+
+    rings: list[tuple[FloatArray, FloatArray]]
+    offsets: IntArray
+    u: FloatArray
+    v_lo: FloatArray
+    v_hi: FloatArray
+    covered_m2: float
+
+
 class ScreenedCovers(NamedTuple):
     """What :func:`screen_cells` measured at each heading, and the cells it kept to fit.
 
@@ -69,6 +109,9 @@ class ScreenedCovers(NamedTuple):
         Line spacing and footprint width [m].
     kept : _Kept or None
         The cells and lines of the headings :func:`fit_screened` can fit (None: none).
+    staged : _Staged or None
+        Every heading's cells and lines, where the compiled screen made them
+        (:func:`screened_cells`).
     """
 
     covered_m2: FloatArray
@@ -76,6 +119,31 @@ class ScreenedCovers(NamedTuple):
     turn_count: IntArray
     interval_m: float
     kept: _Kept | None
+    staged: _Staged | None = None
+
+
+def screened_cells(screened: ScreenedCovers, heading_index: int) -> ScreenedCells | None:
+    """Return the cells and lines :func:`screen_cells` made at one heading (None: it did not).
+
+    Bit for bit those of :func:`planner.cell_plans.cover_heading` at that heading
+    (``tests/planner/test_heading_screen.py``), so a plan need not decompose it again.
+    """
+    s, a = screened.staged, int(heading_index)
+    if s is None or not s.staged[a]:
+        return None
+    u = s.u[s.vertex_at[a] : s.vertex_at[a + 1]]
+    v = s.v[s.vertex_at[a] : s.vertex_at[a + 1]]
+    ends = np.cumsum(s.sizes[s.size_at[a] : s.size_at[a + 1]]).tolist()
+    rings = [(u[i:j], v[i:j]) for i, j in zip([0, *ends[:-1]], ends, strict=True)]
+    k0, k1 = s.scan_at[a], s.scan_at[a + 1]
+    return ScreenedCells(
+        rings,
+        s.offsets[s.offset_at[a] : s.offset_at[a + 1]],
+        s.line_u[k0:k1],
+        s.v_lo[k0:k1],
+        s.v_hi[k0:k1],
+        float(screened.covered_m2[a]),
+    )
 
 
 def screen_covers(
@@ -130,6 +198,7 @@ def screen_cells(
     *,
     reach_m: float = 0.0,
     keep: int = 0,
+    rank: int = 0,
 ) -> ScreenedCovers:
     """:func:`screen_covers`, keeping the cells of the headings that may be fitted next.
 
@@ -147,6 +216,11 @@ def screen_cells(
         (:func:`planner.fitted_cells.turn_change_m`).
     keep : int
         How many of the best-estimated headings :func:`fit_screened` may be asked for.
+    rank : int
+        If above 0, only the ``rank`` best by that estimate are needed: a heading that cannot
+        be among them (the field's area less its turns' term is below the ``rank``-th best)
+        is left unmeasured, its ``covered_m2`` NaN (its lines and turns are counted). With a
+        turning radius most headings are (``planner.screen_kernels._screen``).
 
     Returns
     -------
@@ -158,14 +232,15 @@ def screen_cells(
     if rings is None:  # cover_heading measures (or refuses) every heading
         slow = _by_python(prepared, headings, d, edge, np.arange(len(headings)))
         return ScreenedCovers(*slow, d, None)
-    status, covered, line_count, turn_count, kept = _run_screen(
-        rings, headings, d, edge, float(reach_m), int(keep)
+    area_m2 = float(sum(p.field.area for p in prepared))
+    status, covered, line_count, turn_count, kept, staged = _run_screen(
+        rings, headings, d, edge, float(reach_m), int(keep), int(rank), area_m2
     )
-    left = np.flatnonzero(status != _SCREENED)
+    left = np.flatnonzero(status == _BY_PYTHON)
     if len(left):
         slow = _by_python(prepared, headings, d, edge, left)
         covered[left], line_count[left], turn_count[left] = (s[left] for s in slow)
-    return ScreenedCovers(covered, line_count, turn_count, d, kept if keep > 0 else None)
+    return ScreenedCovers(covered, line_count, turn_count, d, kept if keep > 0 else None, staged)
 
 
 def fit_screened(
@@ -227,28 +302,28 @@ def screen_fitted(
     if rings is None:
         return np.full(len(headings), np.nan)
     # Every heading kept; those the compiled screen leaves to Python are not: NaN.
-    _, covered, line_count, turn_count, kept = _run_screen(
-        rings, headings, d, float(edge_m), 0.0, len(headings)
+    _, covered, line_count, turn_count, kept, _ = _run_screen(
+        rings, headings, d, float(edge_m), 0.0, len(headings), 0, 0.0
     )
     screened = ScreenedCovers(covered, line_count, turn_count, d, kept)
     return fit_screened(screened, np.arange(len(headings)), table, parity_slack_m2=parity_slack_m2)
 
 
 def _run_screen(
-    rings: _Rings, headings: FloatArray, d: float, edge: float, reach_m: float, keep: int
-) -> tuple[IntArray, FloatArray, IntArray, IntArray, _Kept]:
-    """Call :func:`_screen` on the rings at ``headings``, keeping cells as it says."""
+    rings: _Rings,
+    headings: FloatArray,
+    d: float,
+    edge: float,
+    reach_m: float,
+    keep: int,
+    rank: int,
+    area_m2: float,
+) -> tuple[IntArray, FloatArray, IntArray, IntArray, _Kept, _Staged]:
+    """Call :func:`_screen` on the rings at ``headings``, keeping and ranking as it says."""
     cos_t, sin_t = _sweep_cosines(headings)
-    x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings = rings
-    (
-        status, covered, line_count, turn_count,
-        kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi,
-    ) = _screen(
-        x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
-        cos_t, sin_t, d, edge, reach_m, keep,
-    )  # fmt: skip
-    kept = _Kept(kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi)
-    return status, covered, line_count, turn_count, kept
+    figures, kept, staged = _screen(*rings, cos_t, sin_t, d, edge, reach_m, keep, rank, area_m2)
+    status, covered, line_count, turn_count = figures
+    return status, covered, line_count, turn_count, _Kept(*kept), _Staged(*staged)
 
 
 def _by_python(

@@ -36,9 +36,11 @@ IntArray = npt.NDArray[np.int64]
 
 _TIE_M = 1e-9  # planner.coverage._TIE_M
 
-#: A heading's status: screened here, or left to :func:`planner.cell_plans.cover_heading`.
+#: A heading's status: screened here, left to :func:`planner.cell_plans.cover_heading`, or
+#: left unmeasured because it cannot rank (:func:`_screen`'s ``rank``).
 _SCREENED = 0
 _BY_PYTHON = 1
+_UNRANKED = 2
 
 
 @_jit
@@ -145,6 +147,20 @@ def _covered_area(
 #: µm², and this is a thousand of them [m²].
 _KEEP_MARGIN_M2 = 1e-3
 
+#: The cells cover at most the field's area; this share more allows for the sums' rounding.
+_AREA_ROUNDING_SHARE = 1e-9
+
+
+@_jit
+def _stage(
+    staged: npt.NDArray[Any], at: IntArray, a: int, values: npt.NDArray[Any]
+) -> npt.NDArray[Any]:
+    """Append heading ``a``'s ``values`` to ``staged`` (``at[a]:at[a + 1]``), grown as needed."""
+    staged = _grown(staged, at[a], len(values))
+    staged[at[a] : at[a] + len(values)] = values
+    at[a + 1] = at[a] + len(values)
+    return staged
+
 
 @_jit
 def _screen(
@@ -164,12 +180,28 @@ def _screen(
     edge: float,
     reach_m: float,
     keep: int,
+    rank: int,
+    area_m2: float,
 ) -> tuple[
-    IntArray, FloatArray, IntArray, IntArray,
-    IntArray, IntArray, IntArray, IntArray,
-    FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray,
+    tuple[IntArray, FloatArray, IntArray, IntArray],
+    tuple[
+        IntArray, IntArray, IntArray, IntArray,
+        FloatArray, IntArray, IntArray, FloatArray, FloatArray, FloatArray,
+    ],
+    tuple[
+        npt.NDArray[np.bool_], IntArray, IntArray, IntArray, IntArray, FloatArray, FloatArray,
+        IntArray, IntArray, FloatArray, FloatArray, FloatArray,
+    ],
 ]:  # fmt: skip
-    """Screen every heading: status, covered area, lines and turns; and cells kept to fit.
+    """Screen every heading: status, covered area, lines and turns; cells kept to fit; cells.
+
+    Returns three groups: the figures per heading; the kept cells (below); and every
+    heading's cells and lines as decomposed and scanned (``staged[a]``: it was; its cells'
+    rings ``staged_u``, ``staged_v`` ``[vertex_at[a]:vertex_at[a + 1]]`` of sizes
+    ``staged_sizes[size_at[a]:size_at[a + 1]]``, their line offsets
+    ``staged_offsets[offset_at[a]:offset_at[a + 1]]`` and lines ``staged_lu``,
+    ``staged_lo``, ``staged_hi`` ``[scan_at[a]:scan_at[a + 1]]``), bit for bit
+    :func:`planner.cell_plans.cover_heading`'s.
 
     The cells and lines of each heading with lines that may rank among the ``keep`` best by
     the estimate ``covered - 2 * turns * reach_m * d`` (:func:`planner.fitted_cells.estimate_m2`)
@@ -177,8 +209,17 @@ def _screen(
     ``k`` among them (-1: not kept), its chains ``kept_chains[chain_at[k]:chain_at[k + 1]]``,
     its cells' starts in them and line offsets ``kept_chains_at`` and ``kept_offsets``
     ``[cell_at[k]:cell_at[k + 1]]``, its lines ``kept_u``, ``kept_v_lo``, ``kept_v_hi``
-    ``[line_at[k]:line_at[k + 1]]``. A heading is kept unless ``keep`` headings screened
+    ``[line_at[k]:line_at[k + 1]]``. A heading is kept unless ``keep`` headings measured
     before it are estimated more than :data:`_KEEP_MARGIN_M2` higher: those rank before it.
+
+    ``rank > 0``: only the ``rank`` best by the estimate are needed. Every heading is
+    decomposed and its lines scanned first (which counts its turns); then the covers are
+    measured, the fewest turns first, until the field's area (``area_m2``, the most any
+    heading's cells can cover) less the next heading's turns is more than
+    :data:`_KEEP_MARGIN_M2` below the ``rank``-th best estimate: that heading and the rest
+    cannot rank, and are left unmeasured (status ``_UNRANKED``, covered NaN, their lines and
+    turns counted). With a turning radius the turns' term is large and most headings are
+    left so; the figures of the measured ones do not depend on the order.
     """
     headings = len(cos_t)
     parts = len(part_vertices) - 1
@@ -186,21 +227,19 @@ def _screen(
     covered = np.full(headings, np.nan)
     line_count = np.full(headings, -1, dtype=np.int64)
     turn_count = np.full(headings, -1, dtype=np.int64)
-    # Scratch for one heading's cells (rings and chains), grown as needed.
+    # Scratch for one heading's cells (rings), grown as needed.
     all_u, all_v = np.empty(2 * len(x)), np.empty(2 * len(x))
     all_sizes = np.empty(16, dtype=np.int64)
-    all_chains = np.empty(8 * len(x))
-    chains_at = np.empty(17, dtype=np.int64)
-    # The kept headings' cells, and the best estimates so far (greatest first).
-    kept_of = np.full(headings, -1, dtype=np.int64)
-    chain_at, cell_at = np.zeros(headings + 1, np.int64), np.zeros(headings + 1, np.int64)
-    line_at = np.zeros(headings + 1, np.int64)
-    kept_chains = np.empty(0)
-    kept_chains_at, kept_offsets = np.empty(0, np.int64), np.empty(0, np.int64)
-    kept_u, kept_v_lo, kept_v_hi = np.empty(0), np.empty(0), np.empty(0)
-    kept = 0
-    best = np.full(keep, -np.inf)
+    # Every heading's cells and lines, laid end to end (heading a's at [*_at[a]:*_at[a + 1]]).
+    staged = np.zeros(headings, dtype=np.bool_)
+    vertex_at, size_at = np.zeros(headings + 1, np.int64), np.zeros(headings + 1, np.int64)
+    offset_at, scan_at = np.zeros(headings + 1, np.int64), np.zeros(headings + 1, np.int64)
+    staged_u, staged_v = np.empty(4 * len(x)), np.empty(4 * len(x))
+    staged_sizes, staged_offsets = np.empty(64, np.int64), np.empty(64, np.int64)
+    staged_lu, staged_lo, staged_hi = np.empty(64), np.empty(64), np.empty(64)
     for a in range(headings):
+        vertex_at[a + 1], size_at[a + 1] = vertex_at[a], size_at[a]
+        offset_at[a + 1], scan_at[a + 1] = offset_at[a], scan_at[a]
         # The cells of every part, in the parts' order, laid end to end.
         ok = True
         vertices = cells = 0
@@ -239,12 +278,59 @@ def _screen(
         for c in range(1, cells):
             starts[c] = starts[c - 1] + ring_sizes[c - 1]
         offsets, line_u, v_lo, v_hi = _scan(ring_u, ring_v, starts, ring_sizes, d, edge)
+        with_lines = 0
+        for c in range(cells):
+            with_lines += offsets[c + 1] > offsets[c]
+        staged[a] = True
+        line_count[a] = len(line_u)
+        turn_count[a] = max(len(line_u) - with_lines, 0)
+        staged_u = _stage(staged_u, vertex_at, a, ring_u)
+        staged_v = _stage(staged_v, vertex_at, a, ring_v)
+        staged_sizes = _stage(staged_sizes, size_at, a, ring_sizes)
+        staged_offsets = _stage(staged_offsets, offset_at, a, offsets)
+        staged_lu = _stage(staged_lu, scan_at, a, line_u)
+        staged_lo = _stage(staged_lo, scan_at, a, v_lo)
+        staged_hi = _stage(staged_hi, scan_at, a, v_hi)
+    # The most each heading's estimate can be; measured from the highest down when ranking.
+    bound = area_m2 * (1.0 + _AREA_ROUNDING_SHARE) - 2.0 * turn_count * reach_m * d
+    order = np.arange(headings)
+    if rank > 0:
+        order = order[np.argsort(-bound, kind="mergesort")]
+    # Scratch for one heading's chains.
+    all_chains = np.empty(8 * len(x))
+    chains_at = np.empty(17, dtype=np.int64)
+    # The kept headings' cells, and the best estimates so far (greatest first).
+    kept_of = np.full(headings, -1, dtype=np.int64)
+    chain_at, cell_at = np.zeros(headings + 1, np.int64), np.zeros(headings + 1, np.int64)
+    line_at = np.zeros(headings + 1, np.int64)
+    kept_chains = np.empty(0)
+    kept_chains_at, kept_offsets = np.empty(0, np.int64), np.empty(0, np.int64)
+    kept_u, kept_v_lo, kept_v_hi = np.empty(0), np.empty(0), np.empty(0)
+    kept = 0
+    best = np.full(max(keep, rank, 1), -np.inf)
+    for place in range(headings):
+        a = int(order[place])
+        if not staged[a]:
+            continue
+        if rank > 0 and bound[a] < best[rank - 1] - _KEEP_MARGIN_M2:
+            status[a] = _UNRANKED
+            continue
+        ring_u = staged_u[vertex_at[a] : vertex_at[a + 1]]
+        ring_v = staged_v[vertex_at[a] : vertex_at[a + 1]]
+        ring_sizes = staged_sizes[size_at[a] : size_at[a + 1]]
+        offsets = staged_offsets[offset_at[a] : offset_at[a + 1]]
+        line_u = staged_lu[scan_at[a] : scan_at[a + 1]]
+        v_lo = staged_lo[scan_at[a] : scan_at[a + 1]]
+        v_hi = staged_hi[scan_at[a] : scan_at[a + 1]]
+        cells, lines = len(ring_sizes), len(line_u)
         # Each cell's chains (coverage.convex_chains), packed end to end for _laid_out.
+        ok = True
         chains_at = _grown(chains_at, 0, cells + 1)
         chains_at[0] = 0
+        s = 0
         for c in range(cells):
-            s = starts[c]
             n_lo, _, packed = _chains(ring_u[s : s + ring_sizes[c]], ring_v[s : s + ring_sizes[c]])
+            s += ring_sizes[c]
             if n_lo < 0:
                 ok = False
                 break
@@ -252,17 +338,15 @@ def _screen(
             all_chains[chains_at[c] : chains_at[c] + len(packed)] = packed
             chains_at[c + 1] = chains_at[c] + len(packed)
         if not ok:
+            line_count[a] = turn_count[a] = -1
             continue
-        lines = len(line_u)
-        with_lines = 0
-        for c in range(cells):
-            with_lines += offsets[c + 1] > offsets[c]
-        area_m2 = 0.0
+        area = 0.0
         if lines > 0:
-            vouched, odd, area, _ = _laid_out(
+            vouched, odd, pieces, _ = _laid_out(
                 all_chains[: chains_at[cells]], offsets, line_u, v_lo, v_hi, d
             )
             if not vouched:
+                line_count[a] = turn_count[a] = -1
                 continue
             # covered_cells: the cells measured on their own first, in order, then the rest.
             for c in odd:
@@ -271,19 +355,16 @@ def _screen(
                 ok, alone_m2 = _covered_area(chains, line_u[k0:k1], v_lo[k0:k1], v_hi[k0:k1], d)
                 if not ok:
                     break
-                area_m2 += alone_m2
+                area += alone_m2
             if not ok:
+                line_count[a] = turn_count[a] = -1
                 continue
             # area.sum() of the pieces' areas, already flat in their order.
-            area_m2 = area_m2 + (0.0 + _pairwise_sum(area, 0, len(area)))
+            area = area + (0.0 + _pairwise_sum(pieces, 0, len(pieces)))
         status[a] = _SCREENED
-        covered[a] = area_m2
-        line_count[a] = lines
-        turn_count[a] = max(lines - with_lines, 0)
-        if keep == 0:
-            continue
-        estimate = area_m2 - 2.0 * turn_count[a] * reach_m * d
-        if lines > 0 and not estimate < best[keep - 1] - _KEEP_MARGIN_M2:
+        covered[a] = area
+        estimate = area - 2.0 * turn_count[a] * reach_m * d
+        if keep > 0 and lines > 0 and not estimate < best[keep - 1] - _KEEP_MARGIN_M2:
             kept_of[a] = kept
             n_chains = chains_at[cells]
             kept_chains = _grown(kept_chains, chain_at[kept], n_chains)
@@ -304,16 +385,22 @@ def _screen(
             kept_v_hi[k0 : k0 + lines] = v_hi
             line_at[kept + 1] = k0 + lines
             kept += 1
-        if estimate > best[keep - 1]:  # into the best so far, in order
-            i = keep - 1
+        i = len(best) - 1
+        if estimate > best[i]:  # into the best so far, in order
             while i > 0 and estimate > best[i - 1]:
                 best[i] = best[i - 1]
                 i -= 1
             best[i] = estimate
     return (
-        status, covered, line_count, turn_count,
-        kept_of, chain_at[: kept + 1], cell_at[: kept + 1], line_at[: kept + 1],
-        kept_chains, kept_chains_at, kept_offsets, kept_u, kept_v_lo, kept_v_hi,
+        (status, covered, line_count, turn_count),
+        (
+            kept_of, chain_at[: kept + 1], cell_at[: kept + 1], line_at[: kept + 1],
+            kept_chains, kept_chains_at, kept_offsets, kept_u, kept_v_lo, kept_v_hi,
+        ),
+        (
+            staged, vertex_at, size_at, offset_at, scan_at, staged_u, staged_v,
+            staged_sizes, staged_offsets, staged_lu, staged_lo, staged_hi,
+        ),
     )  # fmt: skip
 
 
@@ -446,13 +533,14 @@ def warm_up() -> None:
     assert rings is not None
     x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings = rings
     cos_t, sin_t = _sweep_cosines(np.array([0.0, 135.0]))
-    for keep in (0, 2):
+    for keep, rank in ((0, 0), (2, 2)):
         (
-            _, covered, _, _,
-            kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi,
+            (_, covered, _, _),
+            (kept_of, chain_at, cell_at, line_at, chains, chains_at, offsets, u, v_lo, v_hi),
+            _,
         ) = _screen(
             x, y, sizes, first, ring_of, local, nxt, prv, part_vertices, part_rings,
-            cos_t, sin_t, 4.0, 2.0, 1.0, keep,
+            cos_t, sin_t, 4.0, 2.0, 1.0, keep, rank, ell.area,
         )  # fmt: skip
     t = turn_table(resolve_vehicle("small_tractor"), 4.0)
     _fit_kept(

@@ -13,12 +13,18 @@ from shapely import Polygon, affinity
 
 from bench.screen_speed import prepared_field
 from planner.cell_kernels import sweep_cells
-from planner.cell_plans import cover_heading
+from planner.cell_plans import cover_heading, cover_screened
 from planner.coverage import _laid_out
 from planner.decomposition import SweepRings, _cuts, sweep_rings
 from planner.fit_screen import turn_table
 from planner.fitted_cells import SCREENED_FITS, _turn_count, turn_change_m
-from planner.heading_screen import fit_screened, screen_cells, screen_covers, screen_fitted
+from planner.heading_screen import (
+    fit_screened,
+    screen_cells,
+    screen_covers,
+    screen_fitted,
+    screened_cells,
+)
 from planner.lines import to_sweep
 from planner.vehicles import resolve_vehicle
 from tests.planner.random_fields import fields_with_holes
@@ -212,3 +218,60 @@ def test_headings_not_kept_fit_to_nan() -> None:
     screened = screen_cells(prepared, headings, 4.0, edge_m)  # keep nothing
     fitted = fit_screened(screened, np.arange(len(headings)), turn_table(SMALL, 4.0))
     assert screened.kept is None and np.isnan(fitted).all()
+
+
+@pytest.mark.parametrize(
+    ("field_id", "rank"), [("germany_2018_2019-42", 3), ("germany_2018_2019-75", SCREENED_FITS)]
+)
+def test_a_ranked_screen_measures_the_best_as_in_full_and_leaves_only_what_cannot_rank(
+    field_id: str, rank: int
+) -> None:
+    prepared, edge_m = prepared_small(field_id)
+    headings, d = np.arange(0.0, 180.0, 1.0), 4.0
+    _, reach_m = turn_change_m(SMALL, d)
+    table = turn_table(SMALL, d)
+    full = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, keep=rank)
+    ranked = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, keep=rank, rank=rank)
+
+    left = np.isnan(ranked.covered_m2) & np.isfinite(full.covered_m2)
+    assert left.sum() > len(headings) // 2  # with a radius most headings cannot rank
+    # Each heading left unmeasured: even covering the whole field it ranks below the best.
+    best = best_by_estimate(*full[:3], headings, reach_m, d, rank)
+    assert len(best) == rank
+    area_m2 = sum(p.field.area for p in prepared)
+    kth_m2 = (full.covered_m2 - 2.0 * full.turn_count * reach_m * d)[best[-1]]
+    assert (area_m2 - 2.0 * ranked.turn_count[left] * reach_m * d < kth_m2).all()
+    # The rest measured bit for bit; lines and turns counted at every heading.
+    assert same_bits(ranked.covered_m2[~left], full.covered_m2[~left])
+    assert (ranked.line_count == full.line_count).all()
+    assert (ranked.turn_count == full.turn_count).all()
+    # So the best are the same, kept, and fit the same.
+    assert (best_by_estimate(*ranked[:3], headings, reach_m, d, rank) == best).all()
+    assert same_bits(fit_screened(ranked, best, table), fit_screened(full, best, table))
+
+
+@pytest.mark.parametrize("field_id", REAL_FIELDS)
+def test_the_screened_cells_are_cover_headings_bit_for_bit(field_id: str) -> None:
+    prepared, edge_m = prepared_small(field_id)
+    headings, d = np.arange(0.0, 180.0, 7.0), 4.0
+    _, reach_m = turn_change_m(SMALL, d)
+    screened = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, rank=3)
+    assert np.isnan(screened.covered_m2).any()  # some covers left unmeasured: measured again
+    compared = 0
+    for a, heading in enumerate(headings.tolist()):
+        cells = screened_cells(screened, a)
+        if cells is None:
+            continue
+        expected = cover_heading(prepared, heading, d, edge_m)
+        got = cover_screened(cells, heading, d)
+        assert len(got.cells) == len(expected.cells)
+        for mine, theirs in zip(got.cells, expected.cells, strict=True):
+            assert same_bits(mine.u_ring, theirs.u_ring) and same_bits(mine.v_ring, theirs.v_ring)
+            assert mine.lines == theirs.lines
+        for name in ("offsets", "u", "v_lo", "v_hi"):
+            assert np.array_equal(getattr(got.scan, name), getattr(expected.scan, name))
+            assert same_bits(getattr(got.scan, name), getattr(expected.scan, name))
+        assert same_bits(got.covered_m2, expected.covered_m2)
+        assert got.line_count == expected.line_count
+        compared += 1
+    assert compared > len(headings) // 2
