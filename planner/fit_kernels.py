@@ -339,6 +339,89 @@ def _fit_turns(
     return True
 
 
+@_jit
+def _fit_turn_groups(
+    xy: FloatArray,
+    offsets: IntArray,
+    top: npt.NDArray[np.bool_],
+    turn_at: IntArray,
+    chains: FloatArray,
+    chain_at: IntArray,
+    tolerance: float,
+    shift_out: FloatArray,
+    fits_out: npt.NDArray[np.bool_],
+    xy_out: FloatArray,
+    done_out: npt.NDArray[np.bool_],
+) -> None:
+    """:func:`_fit_turns` of each group of turns on its own machine area.
+
+    Group ``g`` is the turns ``turn_at[g]:turn_at[g + 1]`` on the machine area packed in
+    ``chains[chain_at[g]:chain_at[g + 1]]`` (``Chains.packed``). Each group is one call of
+    :func:`_fit_turns` as :func:`fit_turns` would make it alone, so its figures are that
+    call's to the last bit. ``done_out[g]``: False where the kernel declined the group (an
+    empty chain, or one out of order: the numpy code decides).
+    """
+    for g in range(len(turn_at) - 1):
+        t0, t1 = turn_at[g], turn_at[g + 1]
+        if t1 == t0:
+            done_out[g] = True
+            continue
+        packed = chains[chain_at[g] : chain_at[g + 1]]
+        n_lo, n_hi = int(packed[0]), int(packed[1])
+        if n_lo == 0 or n_hi == 0:
+            done_out[g] = False
+            continue
+        p0, p1 = offsets[t0], offsets[t1]
+        done_out[g] = _fit_turns(
+            xy[p0:p1],
+            offsets[t0 : t1 + 1] - p0,
+            top[t0:t1],
+            packed[2 : 2 + n_lo],
+            packed[2 + n_lo : 2 + 2 * n_lo],
+            packed[2 + 2 * n_lo : 2 + 2 * n_lo + n_hi],
+            packed[2 + 2 * n_lo + n_hi : 2 + 2 * n_lo + 2 * n_hi],
+            tolerance,
+            shift_out[t0:t1],
+            fits_out[t0:t1],
+            xy_out[p0:p1],
+        )
+
+
+def fit_turn_groups(
+    xy: FloatArray,
+    offsets: IntArray,
+    top: npt.NDArray[np.bool_],
+    turn_at: IntArray,
+    chains: FloatArray,
+    chain_at: IntArray,
+    tolerance_m: float,
+) -> tuple[FloatArray, npt.NDArray[np.bool_], FloatArray, npt.NDArray[np.bool_]]:
+    """:func:`fit_turns` of many groups of turns, each on its own machine area, in one call.
+
+    Group ``g`` is the turns ``turn_at[g]:turn_at[g + 1]`` and the area packed in
+    ``chains[chain_at[g]:chain_at[g + 1]]`` (``[n_lo, n_hi, lo_u, lo_v, hi_u, hi_v]``; ``n_lo``
+    or ``n_hi`` 0 for an area the numpy code must take). Returns every turn's shift, fit and
+    moved points, and whether each group was done (the others' entries are left unset).
+    """
+    n, groups = len(offsets) - 1, len(turn_at) - 1
+    shift, fits, moved = np.empty(n), np.empty(n, dtype=np.bool_), np.empty((len(xy), 2))
+    done = np.empty(groups, dtype=np.bool_)
+    _fit_turn_groups(
+        _floats(xy),
+        np.ascontiguousarray(offsets, dtype=np.int64),
+        np.ascontiguousarray(top, dtype=np.bool_),
+        np.ascontiguousarray(turn_at, dtype=np.int64),
+        _floats(chains),
+        np.ascontiguousarray(chain_at, dtype=np.int64),
+        float(tolerance_m),
+        shift,
+        fits,
+        moved,
+        done,
+    )
+    return shift, fits, moved, done
+
+
 def fit_turns(
     xy: FloatArray,
     offsets: IntArray,
@@ -560,6 +643,10 @@ def warm_up() -> None:
     translate_turns(xy, offsets, one, one, one + 1.0, one)
     chain = np.array([0.0, 2.0])
     fit_turns(xy, offsets, np.ones(1, dtype=np.bool_), chain, chain * 0.0, chain, chain + 3.0, 1e-6)
+    packed = np.concatenate([[2.0, 2.0], chain, chain * 0.0, chain, chain + 3.0])
+    fit_turn_groups(
+        xy, offsets, np.ones(1, dtype=np.bool_), np.array([0, 1]), packed, np.array([0, 10]), 1e-6
+    )
     rows = np.zeros((10, 1))
     combine_variants(one, np.ones(1, dtype=np.int64), rows, (0.0, 1.0), None)
     driving_times(xy[:, 0].copy(), xy[:, 1].copy(), 0.5, 0.8, 0.5)

@@ -29,14 +29,13 @@ from shapely import MultiPolygon, Polygon
 from planner.coverage import Chains
 from planner.errors import InvalidParameterError
 from planner.lopsided_turns import (
-    LOPSIDED_RADII,
     LopsidedPairs,
-    lopsided_ends,
+    lopsided_turn_groups,
     lopsided_turns,
     pair_ends,
     tried_lopsided,
 )
-from planner.turn_slides import slide_turns
+from planner.turn_slides import slide_turn_groups, slide_turns
 from planner.turns import (
     TurnCurves,
     TurnEnds,
@@ -173,9 +172,20 @@ def plan_line_turns(
     ``planned``, None for a set of one line. One call for all: a set has a few lines, and
     planning them set by set was mostly call overhead.
     """
-    pairs = [len(u) - 1 if len(u) > 1 else 0 for u, _, _, _ in ordered]
-    if sum(pairs) == 0:
-        return [None] * len(ordered)
+    curves = _all_line_turns(ordered, vehicle)
+    out: list[TurnCurves | None] = []
+    first = 0
+    for u, _, _, _ in ordered:
+        count = len(u) - 1 if len(u) > 1 else 0
+        out.append(turn_range(curves, first, first + count) if count else None)
+        first += count
+    return out
+
+
+def _all_line_turns(
+    ordered: Sequence[tuple[FloatArray, FloatArray, FloatArray, IntArray]], vehicle: Vehicle
+) -> TurnCurves:
+    """Plan the turns between consecutive lines of every set of ``ordered``, set after set."""
     # The six columns of TurnEnds, set by set (one set, the usual case: its slices as they are).
     columns: list[list[FloatArray]] = [[], [], [], [], [], []]
     for u, a, b, _ in ordered:
@@ -185,14 +195,10 @@ def plan_line_turns(
                 columns, (u[:-1], b[:-1], yaw[:-1], u[1:], a[1:], yaw[1:]), strict=True
             ):
                 column.append(values)
+    if not columns[0]:
+        return no_turns(vehicle)
     x0, y0, yaw0, x1, y1, yaw1 = (c[0] if len(c) == 1 else np.concatenate(c) for c in columns)
-    curves = vehicle_turns(TurnEnds(x0, y0, yaw0, x1, y1, yaw1), vehicle)
-    out: list[TurnCurves | None] = []
-    first = 0
-    for count in pairs:
-        out.append(turn_range(curves, first, first + count) if count else None)
-        first += count
-    return out
+    return vehicle_turns(TurnEnds(x0, y0, yaw0, x1, y1, yaw1), vehicle)
 
 
 def _median(values: FloatArray) -> float:
@@ -390,44 +396,43 @@ def fit_line_turns(
 
     :func:`fit_lines`' first round for each set of ``ordered`` (as :func:`plan_line_turns`
     takes them) on its machine area, as its ``first_turns``; None for a set of one line. The
-    turns, level and lopsided (:mod:`planner.lopsided_turns`), are planned in one call each
-    for all sets: a turn depends only on its own ends (:func:`planner.turns.vehicle_turns`),
-    so each set's are those it would plan alone.
+    turns are planned, slid level (:func:`planner.turn_slides.slide_turn_groups`) and tried
+    lopsided (:func:`planner.lopsided_turns.lopsided_turn_groups`) in one call each for all
+    sets: a turn depends only on its own ends (:func:`planner.turns.vehicle_turns`), and each
+    set's are slid as :func:`fit_lines` would slide them alone, so each set's figures are
+    those it would have alone, to the last bit.
     """
-    planned = plan_line_turns(ordered, vehicle)
-    levels: list[tuple[LopsidedPairs, tuple[TurnCurves, FloatArray, BoolArray], BoolArray]] = []
-    variants: list[TurnEnds] = []
-    for (u, a, b, _), machine, curves in zip(ordered, machines, planned, strict=True):
-        if curves is not None:
-            pairs = LopsidedPairs(u, b >= a, b, a, np.arange(len(u) - 1), np.arange(1, len(u)))
-            level, tried = _level_turns(u, pairs.up, pairs.first, pairs.second, machine, curves)
-            levels.append((pairs, level, tried))
-            if tried.any():
-                variants.append(lopsided_ends(pairs, level[0].radius_m, tried))
-    if variants:
-        names = ("x0", "y0", "yaw0", "x1", "y1", "yaw1")
-        joined = TurnEnds(*(np.concatenate([getattr(e, c) for e in variants]) for c in names))
-        lopsided = vehicle_turns(joined, vehicle)
-    out: list[FirstTurns | None] = []
-    start = 0
-    fitted = iter(levels)
-    for machine, curves in zip(machines, planned, strict=True):
-        if curves is None:
-            out.append(None)
-            continue
-        pairs, level, tried = next(fitted)
-        if not tried.any():
-            out.append((level[0], level[1], level[1].copy(), level[2]))
-            continue
-        stop = start + 2 * len(LOPSIDED_RADII) * int(tried.sum())
-        variant_turns = turn_range(lopsided, start, stop)
-        out.append(
-            lopsided_turns(
-                pairs, machine, vehicle, level, tried, tolerance_m=FIT_TOLERANCE_M,
-                planned=variant_turns,
-            )
-        )  # fmt: skip
-        start = stop
+    out: list[FirstTurns | None] = [None] * len(ordered)
+    sets = [i for i, (u, _, _, _) in enumerate(ordered) if len(u) > 1]
+    if not sets:
+        return out
+    # Every set's lines end to end; each turn joins a line to the next of its set.
+    line_at = np.zeros(len(sets) + 1, dtype=np.int64)
+    np.cumsum([len(ordered[i][0]) for i in sets], out=line_at[1:])
+    turn_at = line_at - np.arange(len(sets) + 1)
+    u, v_start, v_end = (np.concatenate([ordered[i][c] for i in sets]) for c in (0, 1, 2))
+    first = np.delete(np.arange(line_at[-1] - 1), line_at[1:-1] - 1)
+    pairs = LopsidedPairs(u, v_end >= v_start, v_end, v_start, first, first + 1)
+    areas = [machines[i] for i in sets]
+    planned = _all_line_turns(ordered, vehicle)
+    top = pairs.up[first]
+    level = slide_turn_groups(planned, top, turn_at, areas, tolerance_m=FIT_TOLERANCE_M)
+    tried = tried_lopsided(planned, top, np.abs(u[first + 1] - u[first]), level[1], level[2])
+    if tried.any():
+        curves, shift_end_m, shift_start_m, fits = lopsided_turn_groups(
+            pairs, areas, turn_at, vehicle, level, tried, tolerance_m=FIT_TOLERANCE_M
+        )
+    else:
+        curves, shift_end_m, fits = level
+        shift_start_m = shift_end_m.copy()
+    for g, i in enumerate(sets):
+        t0, t1 = int(turn_at[g]), int(turn_at[g + 1])
+        out[i] = (
+            turn_range(curves, t0, t1),
+            shift_end_m[t0:t1],
+            shift_start_m[t0:t1],
+            fits[t0:t1],
+        )
     return out
 
 

@@ -14,13 +14,14 @@ the curvature bound holds.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from planner.coverage import Chains
-from planner.turn_slides import slide_turns
+from planner.turn_slides import slide_turn_groups, slide_turns
 from planner.turns import TurnCurves, TurnEnds, vehicle_turns
 from planner.types import Vehicle
 
@@ -127,14 +128,56 @@ def lopsided_turns(
         How far the first line's end and the second line's start move along ``v`` [m].
     fits : ndarray of bool
     """
-    fitted, shift, fits = level
     t = np.nonzero(tried)[0]
-    m = 2 * len(LOPSIDED_RADII)
-    k, back_end_m, back_start_m = _variants(t, fitted.radius_m)
+    k, back_end_m, back_start_m = _variants(t, level[0].radius_m)
     if planned is None:
-        planned = vehicle_turns(lopsided_ends(pairs, fitted.radius_m, tried), vehicle)
+        planned = vehicle_turns(lopsided_ends(pairs, level[0].radius_m, tried), vehicle)
     top = pairs.up[pairs.first[k]]
-    moved, v_shift, v_fits = slide_turns(planned, top, machine, tolerance_m=tolerance_m)
+    slid = slide_turns(planned, top, machine, tolerance_m=tolerance_m)
+    return _least_loss(level, t, back_end_m, back_start_m, top, slid)
+
+
+def lopsided_turn_groups(
+    pairs: LopsidedPairs,
+    machines: Sequence[Chains],
+    turn_at: IntArray,
+    vehicle: Vehicle,
+    level: tuple[TurnCurves, FloatArray, BoolArray],
+    tried: BoolArray,
+    *,
+    tolerance_m: float,
+) -> tuple[TurnCurves, FloatArray, FloatArray, BoolArray]:
+    """:func:`lopsided_turns` of many groups of turns, each on its own machine area, at once.
+
+    Group ``g`` is the turns ``turn_at[g]:turn_at[g + 1]`` (``pairs.first`` and ``second``
+    index lines of all groups laid end to end), fitted on ``machines[g]``; each group's
+    turns are those :func:`lopsided_turns` gives it alone, to the last bit.
+    """
+    t = np.nonzero(tried)[0]
+    k, back_end_m, back_start_m = _variants(t, level[0].radius_m)
+    planned = vehicle_turns(lopsided_ends(pairs, level[0].radius_m, tried), vehicle)
+    top = pairs.up[pairs.first[k]]
+    variant_at = np.searchsorted(k, turn_at)
+    slid = slide_turn_groups(planned, top, variant_at, machines, tolerance_m=tolerance_m)
+    return _least_loss(level, t, back_end_m, back_start_m, top, slid)
+
+
+def _least_loss(
+    level: tuple[TurnCurves, FloatArray, BoolArray],
+    t: IntArray,
+    back_end_m: FloatArray,
+    back_start_m: FloatArray,
+    top: BoolArray,
+    slid: tuple[TurnCurves, FloatArray, BoolArray],
+) -> tuple[TurnCurves, FloatArray, FloatArray, BoolArray]:
+    """Replace each level turn ``t`` by its variant that pulls its ends back least, if less.
+
+    ``slid``: every variant (:func:`_variants` of ``t``) slid until it fits; ``top``: each
+    variant's side. Returns :func:`lopsided_turns`' figures.
+    """
+    fitted, shift, fits = level
+    moved, v_shift, v_fits = slid
+    m = 2 * len(LOPSIDED_RADII)
     loss = np.where(v_fits, 2.0 * np.abs(v_shift) + back_end_m + back_start_m, np.inf)
     best = np.argmin(loss.reshape(len(t), m), axis=1) + np.arange(len(t)) * m
     better = loss[best] < np.where(fits[t], 2.0 * np.abs(shift[t]), np.inf) - 1e-9
