@@ -13,9 +13,12 @@ the lines' spacing; NaN) is measured by ``cover_heading`` itself, for that headi
 With a turning radius, the headings the estimate ranks best are then screened with each cell
 fitted for the vehicle (:mod:`planner.fit_screen`). :func:`screen_cells` keeps the cells of
 those that may rank so while it screens, and :func:`fit_screened` fits them: each heading is
-decomposed once. ``tests/planner/test_heading_screen.py`` holds the figures equal to
-``cover_heading``'s on real and random fields, and the kept cells' fit equal to
-:func:`screen_fitted`'s.
+decomposed once. Asked for the best few only (``rank``), it measures no cover that cannot be
+among them (the field's area less a heading's turns below the best so far: with a radius,
+most headings), and the plan takes its cells from the screen (:func:`screened_cells`).
+``tests/planner/test_heading_screen.py`` holds the figures equal to ``cover_heading``'s on
+real and random fields, the kept cells' fit equal to :func:`screen_fitted`'s, a ranked
+screen's best equal to a full one's, and the screened cells equal to ``cover_heading``'s.
 """
 
 from __future__ import annotations

@@ -12,7 +12,10 @@ form cannot take (``coverage.covered_area``: :func:`_covered_area`) and the tota
 a heading whose cells the cores leave to numpy or shapely is marked for ``cover_heading``.
 
 :func:`_screen` also keeps the cells of the headings that may be fitted next, and
-:func:`_fit_kept` fits those (:mod:`planner.fit_screen`), so no heading is decomposed twice.
+:func:`_fit_kept` fits those (:mod:`planner.fit_screen`), so no heading is decomposed twice;
+it returns every heading's cells and lines too, for the plan's own covers. Asked for the
+``rank`` best only, it decomposes every heading first and measures covers from the fewest
+turns up, until no heading left can rank.
 The Python entries are :mod:`planner.heading_screen`'s.
 """
 
