@@ -134,16 +134,31 @@ def fit_lines(
     """
     keep = np.ones(len(u), dtype=bool)
     up = v_end >= v_start
+    first_drop = None
+    if first_turns is not None and len(u) > 1:
+        # The first round's turns are fitted already: a cell that drops no line is done.
+        curves, shift_end_m, shift_start_m, fits = first_turns
+        a2, b2, first_drop = _pulled_back(
+            u, v_start, v_end, up, shift_end_m, shift_start_m, fits, machine
+        )
+        if not first_drop.any():
+            return FittedLines(u, a2, b2, index, curves)
     # A turn depends only on the two line ends it joins, as given (the pull-back is its own
     # output), so a refit round reuses every turn whose pair of lines is still adjacent and
     # plans only the turns of the pairs that dropping a line made.
     lines = _Lines(u, v_start, v_end, up, index)
     turns = _TurnStore(lines, machine, vehicle, planned, first_turns)
+    if first_drop is not None:
+        every = np.arange(len(u))
+        turns.ids(every[:-1], every[1:])  # the first round's turns, for the next rounds
     for round_ in range(_MAX_ROUNDS):
         k = np.nonzero(keep)[0]
-        fit, drop = _fit_once(k, turns)
-        if not drop.any():
-            return fit
+        if round_ == 0 and first_drop is not None:
+            drop = first_drop
+        else:
+            fit, drop = _fit_once(k, turns)
+            if not drop.any():
+                return fit
         if round_ < _MAX_ROUNDS // 2:
             # Lines drop from the sides inwards, so the rest stay an interval apart (R2):
             # a problem left of the middle drops the leftmost line, right of it the rightmost.
@@ -234,15 +249,38 @@ def _fit_once(k: IntArray, turns: _TurnStore) -> tuple[FittedLines, BoolArray]:
     if n < 2:
         return FittedLines(u, a, b, index, turns.empty), np.zeros(n, dtype=bool)
     ids = turns.ids(k[:-1], k[1:])
-    fits = turns.fits[ids]
+    a2, b2, drop = _pulled_back(
+        u, a, b, up, turns.shift_end_m[ids], turns.shift_start_m[ids], turns.fits[ids], machine
+    )
+    if drop.any():
+        return FittedLines(u, a2, b2, index, turns.empty), drop
+    return FittedLines(u, a2, b2, index, turns.take(ids)), drop
+
+
+def _pulled_back(
+    u: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    up: BoolArray,
+    shift_end_m: FloatArray,
+    shift_start_m: FloatArray,
+    fits: BoolArray,
+    machine: Chains,
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """Move the ends of the lines ``u`` (from ``a`` to ``b``) by their turns' shifts.
+
+    ``shift_end_m``, ``shift_start_m`` and ``fits``: each turn's, between consecutive lines
+    (:func:`_fit_turns`). Returns the new starts and ends, and which lines to drop.
+    """
+    n = len(u)
     a2, b2 = a.copy(), b.copy()
-    b2[:-1] += turns.shift_end_m[ids]
-    a2[1:] += turns.shift_start_m[ids]
+    b2[:-1] += shift_end_m
+    a2[1:] += shift_start_m
     length = np.where(up, b2 - a2, a2 - b2)
     drop = length < 0.0
     # A line at a side of the cell and an end of the route, whose one turn pulls its
     # neighbour's end back further than the line itself runs, costs more than it tills.
-    ends = ((0, abs(turns.shift_start_m[ids[0]])), (n - 1, abs(turns.shift_end_m[ids[-1]])))
+    ends = ((0, abs(shift_start_m[0])), (n - 1, abs(shift_end_m[-1])))
     for e, pulled in ends:
         if pulled > length[e] and u[e] in (u.min(), u.max()):
             drop[e] = True
@@ -256,9 +294,7 @@ def _fit_once(k: IntArray, turns: _TurnStore) -> tuple[FittedLines, BoolArray]:
             drop[outer] = True
     if drop.all():  # one line needs no turn: keep the longest
         drop[int(np.argmax(np.abs(b - a)))] = False
-    if drop.any():
-        return FittedLines(u, a2, b2, index, turns.empty), drop
-    return FittedLines(u, a2, b2, index, turns.take(ids)), drop
+    return a2, b2, drop
 
 
 class _TurnStore:
