@@ -340,10 +340,15 @@ SCREENED_FITS = 24
 
 
 class CoverPicks(NamedTuple):
-    """:func:`cover_picks`' headings, and the screen of every heading it ranked them on."""
+    """:func:`cover_picks`' headings, and the screen of every heading it ranked them on.
+
+    ``cell_losses_m2``: for each heading screened fitted (by its index), what fitting takes
+    off each of its cells both ways round, as :func:`excluded_variants` would measure it.
+    """
 
     picks: list[int]
     screen: ScreenedCovers
+    cell_losses_m2: dict[int, FloatArray]
 
 
 def cover_picks(
@@ -405,11 +410,11 @@ def cover_picks(
     >>> from planner.vehicles import resolve_vehicle
     >>> ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
     >>> headings = np.array([0.0, 45.0, 90.0, 135.0])
-    >>> picks, _ = cover_picks([sweep_rings(ell)], headings, 4.0, 2.0, resolve_vehicle(None))
+    >>> picks = cover_picks([sweep_rings(ell)], headings, 4.0, 2.0, resolve_vehicle(None)).picks
     >>> headings[picks[:2]].tolist()  # the best two
     [0.0, 90.0]
     """
-    from planner.heading_screen import fit_screened, screen_cells  # numba: the first plan's
+    from planner.heading_screen import fit_screened_cells, screen_cells  # numba: first plan's
 
     d = float(interval_m)
     _, reach_m = turn_change_m(vehicle, d)
@@ -434,25 +439,35 @@ def cover_picks(
     # Rounded to a µm² so that the last bits of another CPU's sums cannot reorder a tie (R7).
     estimate = np.round(estimate, 6)
     order = np.lexsort((headings_deg, -estimate))  # headings refused sort last
+    cell_losses_m2: dict[int, FloatArray] = {}
     if turn_table is not None:
         screened = order[:SCREENED_FITS]
         screened = screened[np.isfinite(estimate[screened])]  # (the refused are last)
-        fitted_m2 = fit_screened(screen, screened, turn_table, parity_slack_m2=parity_slack_m2)
-        rank = np.round(np.where(np.isfinite(fitted_m2), fitted_m2, -np.inf), 6)
+        fits = fit_screened_cells(screen, screened, turn_table, parity_slack_m2=parity_slack_m2)
+        rank = np.round(np.where(np.isfinite(fits.fitted_m2), fits.fitted_m2, -np.inf), 6)
         order = np.concatenate(
             [screened[np.lexsort((headings_deg[screened], -rank))], order[len(screened) :]]
         )
-    return CoverPicks([int(a) for a in order[:COVER_FITS] if np.isfinite(estimate[a])], screen)
+        for a, losses in zip(screened.tolist(), fits.cell_losses_m2, strict=True):
+            if losses is not None:
+                cell_losses_m2[a] = losses
+    picks = [int(a) for a in order[:COVER_FITS] if np.isfinite(estimate[a])]
+    return CoverPicks(picks, screen, cell_losses_m2)
 
 
 def excluded_variants(
-    cover: CellCover, table: TurnTable, interval_m: float, slack_m2: float
+    cover: CellCover,
+    table: TurnTable,
+    interval_m: float,
+    slack_m2: float,
+    cell_losses_m2: FloatArray | None = None,
 ) -> BoolArray:
     """Return the variants of ``cover``'s cells that would buy length with coverage (R5).
 
     Each cell is screened fitted both ways round
-    (:func:`planner.parity_kernels.parity_losses_m2`); the variants of a way that loses more
-    than ``slack_m2`` beyond the other are excluded from the cell order
+    (:func:`planner.parity_kernels.parity_losses_m2`, unless ``cell_losses_m2`` holds that
+    already: :class:`CoverPicks`); the variants of a way that loses more than ``slack_m2``
+    beyond the other are excluded from the cell order
     (:func:`planner.cell_plans.order_heading`).
 
     Returns
@@ -460,8 +475,10 @@ def excluded_variants(
     ndarray of bool, shape (cells, 4)
     """
     scan = cover.scan
-    losses = parity_losses_m2(
-        [c.chains for c in cover.cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi,
-        interval_m, table,
-    )  # fmt: skip
+    losses = cell_losses_m2
+    if losses is None:
+        losses = parity_losses_m2(
+            [c.chains for c in cover.cells], scan.offsets, scan.u, scan.v_lo, scan.v_hi,
+            interval_m, table,
+        )  # fmt: skip
     return parity_choice(losses, np.diff(scan.offsets), slack_m2)

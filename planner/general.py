@@ -249,11 +249,12 @@ def plan_general(
         parity_slack_m2 = PARITY_SLACK_SHARE * float(field_local.area)
         must_fit: list[int] = []
         screen: ScreenedCovers | None = None
+        cell_losses_m2: dict[int, npt.NDArray[np.float64]] = {}
         if len(ranked) > 1:
             # R5: the headings that the decomposed estimate of fitted coverage, at every
             # heading, ranks best-covering are fitted too (with a radius, its best are
             # screened fitted).
-            picks, screen = cover_picks(
+            picks, screen, cell_losses_m2 = cover_picks(
                 prepared, headings, d, edge, machine, table, parity_slack_m2=parity_slack_m2
             )
             ranked += [a for a in picks if a not in ranked]
@@ -278,7 +279,9 @@ def plan_general(
                 # more cover, to save length.
                 excluded = None
                 if table is not None:
-                    excluded = excluded_variants(covers[i], table, d, parity_slack_m2)
+                    excluded = excluded_variants(
+                        covers[i], table, d, parity_slack_m2, cell_losses_m2.get(ranked[i])
+                    )
                 plan = order_heading(covers[i], start_xy, after_lines, excluded=excluded)
                 orders[i] = reach_headland(plan, d) if rings else plan
             return orders[i]

@@ -258,14 +258,49 @@ def fit_screened(
     :func:`screen_fitted` of ``screened``'s headings ``which`` (indices), to the last bit, at
     those whose cells :func:`screen_cells` kept; NaN at the others.
     """
+    return fit_screened_cells(screened, which, table, parity_slack_m2=parity_slack_m2).fitted_m2
+
+
+class ScreenedFits(NamedTuple):
+    """:func:`fit_screened_cells`' figures.
+
+    Attributes
+    ----------
+    fitted_m2 : ndarray of float
+        :func:`fit_screened`'s.
+    cell_losses_m2 : list of ndarray or None
+        Per heading asked for, what fitting takes off each of its cells, with the cell's
+        first line driven up, then down, shape (cells, 2)
+        (:func:`planner.parity_kernels.parity_losses_m2` of its cells, to the last bit);
+        None where the cells were not kept [m²].
+    """
+
+    fitted_m2: FloatArray
+    cell_losses_m2: list[FloatArray | None]
+
+
+def fit_screened_cells(
+    screened: ScreenedCovers,
+    which: npt.ArrayLike,
+    table: TurnTable,
+    *,
+    parity_slack_m2: float = math.inf,
+) -> ScreenedFits:
+    """:func:`fit_screened`, with each heading's cells' losses both ways round."""
     at = np.atleast_1d(np.asarray(which, dtype=np.int64)).ravel()
     if screened.kept is None:
-        return np.full(len(at), np.nan)
+        return ScreenedFits(np.full(len(at), np.nan), [None] * len(at))
     t = table
-    return _fit_kept(
+    fitted, loss_at, losses = _fit_kept(
         *screened.kept, screened.covered_m2, at, screened.interval_m,
         t.offsets, t.u, t.v, t.u_lo, t.u_hi, t.beyond_m, t.scalars, float(parity_slack_m2),
     )  # fmt: skip
+    bounds = loss_at.tolist()
+    cells: list[FloatArray | None] = [
+        losses[i:j] if math.isfinite(f) else None
+        for i, j, f in zip(bounds[:-1], bounds[1:], fitted.tolist(), strict=True)
+    ]
+    return ScreenedFits(fitted, cells)
 
 
 def screen_fitted(

@@ -430,50 +430,45 @@ def _fit_kept(
     table_beyond_m: FloatArray,
     table_scalars: FloatArray,
     parity_slack_m2: float,
-) -> FloatArray:
+) -> tuple[FloatArray, IntArray, FloatArray]:
     """Estimate the fitted coverage of the headings ``which`` from their kept cells [m²].
 
     NaN at a heading whose cells were not kept. ``parity_slack_m2``: as
-    :func:`planner.parity_kernels.cell_loss_m2` takes it.
+    :func:`planner.parity_kernels.cell_loss_m2` takes it. Also returns what fitting takes
+    off each cell of them both ways round (:func:`planner.parity_kernels._parity_losses`):
+    heading ``which[i]``'s cells are the rows ``losses[loss_at[i]:loss_at[i + 1]]`` (none if
+    not kept).
     """
     fitted = np.full(len(which), np.nan)
     table = (table_offsets, table_u, table_v, table_u_lo, table_u_hi)
+    loss_at = np.zeros(len(which) + 1, dtype=np.int64)
+    for i in range(len(which)):
+        k = kept_of[which[i]]
+        loss_at[i + 1] = loss_at[i] + (cell_at[k + 1] - cell_at[k] - 1 if k >= 0 else 0)
+    losses = np.empty((loss_at[-1], 2))
     for i in range(len(which)):
         k = kept_of[which[i]]
         if k < 0:
             continue
         c0, c1 = cell_at[k], cell_at[k + 1]
         k0, k1 = line_at[k], line_at[k + 1]
-        fitted[i] = covered[which[i]] - _fitted_m2(
+        cells = _parity_losses(
             kept_chains[chain_at[k] : chain_at[k + 1]], kept_chains_at[c0:c1],
             kept_offsets[c0:c1], kept_u[k0:k1], kept_v_lo[k0:k1], kept_v_hi[k0:k1], d,
-            table, table_beyond_m, table_scalars, parity_slack_m2,
+            table, table_beyond_m, table_scalars,
         )  # fmt: skip
-    return fitted
+        losses[loss_at[i] : loss_at[i + 1]] = cells
+        fitted[i] = covered[which[i]] - _fitted_m2(cells, kept_offsets[c0:c1], parity_slack_m2)
+    return fitted, loss_at, losses
 
 
 @_jit
-def _fitted_m2(
-    all_chains: FloatArray,
-    chains_at: IntArray,
-    offsets: IntArray,
-    line_u: FloatArray,
-    v_lo: FloatArray,
-    v_hi: FloatArray,
-    d: float,
-    table: tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray],
-    table_beyond_m: FloatArray,
-    table_scalars: FloatArray,
-    parity_slack_m2: float,
-) -> float:
+def _fitted_m2(losses: FloatArray, offsets: IntArray, parity_slack_m2: float) -> float:
     """Return what fitting takes off one heading's cover [m²].
 
-    Each cell is fitted both ways round (:func:`planner.parity_kernels._parity_losses`) and
-    counted as the plan will drive it (:func:`planner.parity_kernels.cell_loss_m2`).
+    Each cell fitted both ways round (``losses``: :func:`planner.parity_kernels._parity_losses`)
+    is counted as the plan will drive it (:func:`planner.parity_kernels.cell_loss_m2`).
     """
-    losses = _parity_losses(
-        all_chains, chains_at, offsets, line_u, v_lo, v_hi, d, table, table_beyond_m, table_scalars
-    )
     total = 0.0
     for c in range(len(offsets) - 1):
         if offsets[c + 1] - offsets[c] >= 2:  # one line: no turn

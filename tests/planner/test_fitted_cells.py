@@ -31,7 +31,7 @@ def test_cover_picks_are_the_best_headings_by_the_decomposed_estimate(
     machine = resolve_vehicle(vehicle)
     headings = np.arange(0.0, 180.0, 1.0)
 
-    picks, _ = cover_picks(prepared, headings, 4.0, edge_m, machine)
+    picks = cover_picks(prepared, headings, 4.0, edge_m, machine).picks
 
     # Measured the slow way: every heading decomposed on its own.
     estimate = np.array(

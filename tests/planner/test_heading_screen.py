@@ -20,12 +20,14 @@ from planner.fit_screen import turn_table
 from planner.fitted_cells import SCREENED_FITS, _turn_count, turn_change_m
 from planner.heading_screen import (
     fit_screened,
+    fit_screened_cells,
     screen_cells,
     screen_covers,
     screen_fitted,
     screened_cells,
 )
 from planner.lines import to_sweep
+from planner.parity_kernels import parity_losses_m2
 from planner.vehicles import resolve_vehicle
 from tests.planner.random_fields import fields_with_holes
 from tests.planner.test_real_fields import real_fields
@@ -275,3 +277,30 @@ def test_the_screened_cells_are_cover_headings_bit_for_bit(field_id: str) -> Non
         assert got.line_count == expected.line_count
         compared += 1
     assert compared > len(headings) // 2
+
+
+@pytest.mark.parametrize("field_id", ["germany_2018_2019-42", "germany_2018_2019-75"])
+def test_the_kept_cells_losses_are_parity_losses_of_cover_heading_bit_for_bit(
+    field_id: str,
+) -> None:
+    prepared, edge_m = prepared_small(field_id)
+    headings, d = np.arange(0.0, 180.0, 3.0), 4.0
+    _, reach_m = turn_change_m(SMALL, d)
+    table = turn_table(SMALL, d)
+    screened = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, keep=SCREENED_FITS)
+    which = np.arange(len(headings))
+    fits = fit_screened_cells(screened, which, table)
+    assert same_bits(fits.fitted_m2, fit_screened(screened, which, table))
+    compared = 0
+    for a, losses in enumerate(fits.cell_losses_m2):
+        if losses is None:
+            assert np.isnan(fits.fitted_m2[a])  # not kept
+            continue
+        cover = cover_heading(prepared, float(headings[a]), d, edge_m)
+        s = cover.scan
+        expected = parity_losses_m2(
+            [c.chains for c in cover.cells], s.offsets, s.u, s.v_lo, s.v_hi, d, table
+        )
+        assert same_bits(losses, expected)
+        compared += 1
+    assert 0 < compared < len(headings)  # some kept, some not: both ways are tested
