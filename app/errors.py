@@ -206,6 +206,36 @@ def _cause(exc: Exception) -> str:
     return f"{type(cause).__name__}: {text[0] if text else ''}"
 
 
+#: Where a driver names the key of a violated constraint: SQLite ``UNIQUE constraint failed:
+#: fields.organisation_id, fields.name`` (NOT NULL alike), PostgreSQL's detail line
+#: ``Key (organisation_id, name)=(…) already exists.``
+_SQLITE_KEY = re.compile(r"constraint failed: (\w+\.\w+(?:, \w+\.\w+)*)")
+_POSTGRES_KEY = re.compile(r"Key \(([\w, ]+)\)=")
+
+
+def conflicting_input(exc: IntegrityError) -> str | None:
+    """Return the input a database constraint violation is about, if its driver names one.
+
+    The column of a NOT NULL violation, or the last column of a violated key (those before
+    it scope it: an organisation, a plan); never the key's value, which can be a secret's
+    hash. None where the driver names no column (SQLite's foreign keys).
+    """
+    orig = getattr(exc, "orig", None)
+    diag = getattr(orig, "diag", None)  # psycopg's parts of a PostgreSQL error
+    column = getattr(diag, "column_name", None)
+    if isinstance(column, str) and column:
+        return column
+    texts = [str(getattr(diag, "message_detail", None) or ""), str(orig)]
+    for text in texts:
+        key = _POSTGRES_KEY.search(text)
+        if key:
+            return key[1].split(",")[-1].strip()
+    key = _SQLITE_KEY.search(str(orig))
+    if key:
+        return key[1].split(",")[-1].strip().split(".", 1)[1]
+    return None
+
+
 def error_response(exc: Exception, lang: str = DEFAULT_LANGUAGE) -> JSONResponse:
     """Build the JSON answer for ``exc``: its status from the table, ``str(exc)`` as detail.
 
@@ -219,6 +249,9 @@ def error_response(exc: Exception, lang: str = DEFAULT_LANGUAGE) -> JSONResponse
         if isinstance(exc, cls):
             logger.warning("database error answered %s: %s", status_for(exc), _cause(exc))
             detail = text.format(s=RETRY_AFTER_S)
+            if isinstance(exc, IntegrityError):
+                column = conflicting_input(exc)
+                detail = detail if column is None else f"{column}: {detail}"
             break
     code = status_for(exc)
     headers: dict[str, str] | None = getattr(exc, "headers", None)
