@@ -210,26 +210,26 @@ def _cause(exc: Exception) -> str:
 #: fields.organisation_id, fields.name`` (NOT NULL alike), PostgreSQL's detail line
 #: ``Key (organisation_id, name)=(…) already exists.``
 _SQLITE_KEY = re.compile(r"constraint failed: (\w+\.\w+(?:, \w+\.\w+)*)")
-_POSTGRES_KEY = re.compile(r"Key \(([\w, ]+)\)=")
+_POSTGRES_KEY = re.compile(r"^Key \(([\w, ]+)\)=.*(?:already exists|is not present in table)")
 
 
 def conflicting_input(exc: IntegrityError) -> str | None:
     """Return the input a database constraint violation is about, if its driver names one.
 
-    The column of a NOT NULL violation, or the last column of a violated key (those before
-    it scope it: an organisation, a plan); never the key's value, which can be a secret's
-    hash. None where the driver names no column (SQLite's foreign keys).
+    The column of a NOT NULL violation, or the last column of a key that already exists or
+    refers to a row that does not (those before it scope it: an organisation, a plan); never
+    the key's value, which can be a secret's hash. None where the driver names no column
+    (SQLite's foreign keys; a row still referenced, which is no input of the request).
     """
     orig = getattr(exc, "orig", None)
     diag = getattr(orig, "diag", None)  # psycopg's parts of a PostgreSQL error
     column = getattr(diag, "column_name", None)
     if isinstance(column, str) and column:
         return column
-    texts = [str(getattr(diag, "message_detail", None) or ""), str(orig)]
-    for text in texts:
-        key = _POSTGRES_KEY.search(text)
-        if key:
-            return key[1].split(",")[-1].strip()
+    # Only the detail line: the message of a CHECK violation quotes the row's values.
+    key = _POSTGRES_KEY.search(str(getattr(diag, "message_detail", None) or ""))
+    if key:
+        return key[1].split(",")[-1].strip()
     key = _SQLITE_KEY.search(str(orig))
     if key:
         return key[1].split(",")[-1].strip().split(".", 1)[1]

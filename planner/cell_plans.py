@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -23,9 +22,6 @@ from planner.decomposition import SweepRings, decompose_sweep
 from planner.lines import LineScan, from_sweep, scan_cells
 from planner.ordering import aggregate_scan, combine_variants, variant_ends
 from planner.types import Objective
-
-if TYPE_CHECKING:  # the screen's kernels compile on first use, not on import
-    from planner.heading_screen import ScreenedCells
 
 FloatArray = npt.NDArray[np.float64]
 #: ``move_m(exits, entries)``: lengths [m] of the moves from every exit to every entry.
@@ -105,24 +101,29 @@ def cover_heading(
     return CellCover(heading, cells, scan, len(scan.u), covered)
 
 
-def cover_screened(cells: ScreenedCells, heading: float, d: float) -> CellCover:
-    """:func:`cover_heading` from the cells and lines the compiled screen made at ``heading``.
+def cover_screened(
+    rings: list[tuple[FloatArray, FloatArray]],
+    offsets: npt.NDArray[np.int64],
+    u: FloatArray,
+    v_lo: FloatArray,
+    v_hi: FloatArray,
+    covered_m2: float,
+    heading: float,
+    d: float,
+) -> CellCover:
+    """:func:`cover_heading` from cells and lines decomposed and scanned at ``heading`` already.
 
-    They are ``cover_heading``'s bit for bit (:func:`planner.heading_screen.screened_cells`);
-    so is the cover, measured here if the screen left it unmeasured.
+    ``rings``, ``offsets``, ``u``, ``v_lo``, ``v_hi`` and ``covered_m2`` as the compiled
+    screen made them, ``cover_heading``'s bit for bit
+    (:func:`planner.heading_screen.screened_cells`); a NaN ``covered_m2`` (left unmeasured)
+    is measured here.
     """
-    scan = LineScan(np.zeros(len(cells.rings)), cells.offsets, cells.u, cells.v_lo, cells.v_hi)
-    lines = cells.offsets.tolist()
-    cell_list = [
-        Cell(u_ring, v_ring, convex_chains(u_ring, v_ring), slice(lines[c], lines[c + 1]))
-        for c, (u_ring, v_ring) in enumerate(cells.rings)
-    ]
-    covered = cells.covered_m2
+    scan = LineScan(np.zeros(len(rings)), offsets, u, v_lo, v_hi)
+    cells = _cells(rings, offsets)
+    covered = covered_m2
     if math.isnan(covered):
-        covered = covered_cells(
-            [c.chains for c in cell_list], scan.offsets, scan.u, scan.v_lo, scan.v_hi, d
-        )
-    return CellCover(heading, cell_list, scan, len(scan.u), covered)
+        covered = covered_cells([c.chains for c in cells], offsets, u, v_lo, v_hi, d)
+    return CellCover(heading, cells, scan, len(u), covered)
 
 
 def order_heading(
@@ -180,12 +181,18 @@ def _scan_cells(
     sizes = np.array([len(r[0]) for r in rings], dtype=np.int64)
     offsets, line_u, v_lo, v_hi = cell_kernels.scan_rings(u, v, sizes, d, edge_m)
     scan = LineScan(np.zeros(len(rings)), offsets, line_u, v_lo, v_hi)
+    return scan, _cells(rings, offsets)
+
+
+def _cells(
+    rings: list[tuple[FloatArray, FloatArray]], offsets: npt.NDArray[np.int64]
+) -> list[Cell]:
+    """Return each ring as a cell with its chains and its lines ``offsets[c]:offsets[c + 1]``."""
     lines = offsets.tolist()
-    cells = [
+    return [
         Cell(u_ring, v_ring, convex_chains(u_ring, v_ring), slice(lines[c], lines[c + 1]))
         for c, (u_ring, v_ring) in enumerate(rings)
     ]
-    return scan, cells
 
 
 def scan_cells_numpy(

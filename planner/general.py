@@ -267,7 +267,7 @@ def plan_general(
             cells = None if screen is None else screened_cells(screen, a)
             if cells is None:
                 return cover_heading(prepared, float(headings[a]), d, edge)
-            return cover_screened(cells, float(headings[a]), d)
+            return cover_screened(*cells, float(headings[a]), d)
 
         covers = [cover_at(a) for a in ranked]
         orders: dict[int, CellPlan] = {}

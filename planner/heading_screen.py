@@ -61,7 +61,7 @@ class _Kept(NamedTuple):
     v_hi: FloatArray
 
 
-class _Staged(NamedTuple):
+class StagedCells(NamedTuple):
     """Every heading's cells and lines as :func:`planner.screen_kernels._screen` made them."""
 
     staged: npt.NDArray[np.bool_]
@@ -112,7 +112,7 @@ class ScreenedCovers(NamedTuple):
         Line spacing and footprint width [m].
     kept : _Kept or None
         The cells and lines of the headings :func:`fit_screened` can fit (None: none).
-    staged : _Staged or None
+    staged : StagedCells or None
         Every heading's cells and lines, where the compiled screen made them
         (:func:`screened_cells`).
     """
@@ -122,7 +122,7 @@ class ScreenedCovers(NamedTuple):
     turn_count: IntArray
     interval_m: float
     kept: _Kept | None
-    staged: _Staged | None = None
+    staged: StagedCells | None = None
 
 
 def screened_cells(screened: ScreenedCovers, heading_index: int) -> ScreenedCells | None:
@@ -223,7 +223,8 @@ def screen_cells(
         If above 0, only the ``rank`` best by that estimate are needed: a heading that cannot
         be among them (the field's area less its turns' term is below the ``rank``-th best)
         is left unmeasured, its ``covered_m2`` NaN (its lines and turns are counted). With a
-        turning radius most headings are (``planner.screen_kernels._screen``).
+        turning radius most headings are (``planner.screen_kernels._screen``). At least
+        ``keep``: the headings to fit must all be measured.
 
     Returns
     -------
@@ -231,6 +232,8 @@ def screen_cells(
     """
     headings = np.atleast_1d(np.asarray(headings_deg, dtype=np.float64)).ravel()
     d, edge = float(interval_m), float(edge_m)
+    if rank > 0:
+        rank = max(rank, keep)  # a heading left unmeasured is not kept either
     rings = _ring_arrays(prepared) if len(headings) else None
     if rings is None:  # cover_heading measures (or refuses) every heading
         slow = _by_python(prepared, headings, d, edge, np.arange(len(headings)))
@@ -356,12 +359,14 @@ def _run_screen(
     keep: int,
     rank: int,
     area_m2: float,
-) -> tuple[IntArray, FloatArray, IntArray, IntArray, _Kept, _Staged]:
+) -> tuple[IntArray, FloatArray, IntArray, IntArray, _Kept, StagedCells]:
     """Call :func:`_screen` on the rings at ``headings``, keeping and ranking as it says."""
     cos_t, sin_t = _sweep_cosines(headings)
     figures, kept, staged = _screen(*rings, cos_t, sin_t, d, edge, reach_m, keep, rank, area_m2)
     status, covered, line_count, turn_count = figures
-    return status, covered, line_count, turn_count, _Kept(*kept), _Staged(*staged)
+    for array in staged:
+        array.flags.writeable = False  # the plan's cells are views of these
+    return status, covered, line_count, turn_count, _Kept(*kept), StagedCells(*staged)
 
 
 def _by_python(

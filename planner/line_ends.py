@@ -142,7 +142,7 @@ def fit_lines(
             u, v_start, v_end, up, shift_end_m, shift_start_m, fits, machine
         )
         if not first_drop.any():
-            return FittedLines(u, a2, b2, index, curves)
+            return FittedLines(u.copy(), a2, b2, index.copy(), curves)  # not the caller's
     # A turn depends only on the two line ends it joins, as given (the pull-back is its own
     # output), so a refit round reuses every turn whose pair of lines is still adjacent and
     # plans only the turns of the pairs that dropping a line made.
@@ -447,6 +447,7 @@ def fit_line_turns(
     np.cumsum([len(ordered[i][0]) for i in sets], out=line_at[1:])
     turn_at = line_at - np.arange(len(sets) + 1)
     u, v_start, v_end = (np.concatenate([ordered[i][c] for i in sets]) for c in (0, 1, 2))
+    # Each line but a set's last turns to the next; no turn joins one set to the next.
     first = np.delete(np.arange(line_at[-1] - 1), line_at[1:-1] - 1)
     pairs = LopsidedPairs(u, v_end >= v_start, v_end, v_start, first, first + 1)
     areas = [machines[i] for i in sets]

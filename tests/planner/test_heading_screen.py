@@ -265,7 +265,7 @@ def test_the_screened_cells_are_cover_headings_bit_for_bit(field_id: str) -> Non
         if cells is None:
             continue
         expected = cover_heading(prepared, heading, d, edge_m)
-        got = cover_screened(cells, heading, d)
+        got = cover_screened(*cells, heading, d)
         assert len(got.cells) == len(expected.cells)
         for mine, theirs in zip(got.cells, expected.cells, strict=True):
             assert same_bits(mine.u_ring, theirs.u_ring) and same_bits(mine.v_ring, theirs.v_ring)
@@ -304,3 +304,19 @@ def test_the_kept_cells_losses_are_parity_losses_of_cover_heading_bit_for_bit(
         assert same_bits(losses, expected)
         compared += 1
     assert 0 < compared < len(headings)  # some kept, some not: both ways are tested
+
+
+def test_a_ranked_screen_measures_every_heading_it_is_asked_to_keep() -> None:
+    """Asked to keep more than it ranks, the screen ranks as many: none to fit is left out."""
+    # An L: covered nearly whole at most headings, so the bound prunes close to the best.
+    ell = Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)])
+    prepared, edge_m = [sweep_rings(ell)], 1.35
+    headings, d = np.arange(0.0, 180.0, 1.0), 4.0
+    _, reach_m = turn_change_m(SMALL, d)
+    screened = screen_cells(
+        prepared, headings, d, edge_m, reach_m=reach_m, keep=SCREENED_FITS, rank=3
+    )
+    full = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m)
+    best = best_by_estimate(*full[:3], headings, reach_m, d, SCREENED_FITS)
+    assert len(best) == SCREENED_FITS
+    assert np.isfinite(fit_screened(screened, best, turn_table(SMALL, d))).all()
