@@ -177,6 +177,13 @@ def prepared_small(field_id: str) -> tuple[list[SweepRings], float]:
     return prepared_field(dict(real_fields())[field_id], vehicle="small_tractor")
 
 
+def small_at_4m(field_id: str) -> tuple[list[SweepRings], float, FloatArray, float, float]:
+    """A real field's parts and edge with ``small_tractor``, every 1°, 4 m, and the reach."""
+    prepared, edge_m = prepared_small(field_id)
+    _, reach_m = turn_change_m(SMALL, 4.0)
+    return prepared, edge_m, np.arange(0.0, 180.0, 1.0), 4.0, reach_m
+
+
 def best_by_estimate(
     covered: FloatArray,
     lines: FloatArray,
@@ -197,9 +204,7 @@ def best_by_estimate(
 def test_the_best_estimated_headings_are_kept_and_fit_as_screen_fitted(
     field_id: str, keep: int
 ) -> None:
-    prepared, edge_m = prepared_small(field_id)
-    headings, d = np.arange(0.0, 180.0, 1.0), 4.0
-    _, reach_m = turn_change_m(SMALL, d)
+    prepared, edge_m, headings, d, reach_m = small_at_4m(field_id)
     table = turn_table(SMALL, d)
     screened = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, keep=keep)
     assert screened.kept is not None
@@ -228,9 +233,7 @@ def test_headings_not_kept_fit_to_nan() -> None:
 def test_a_ranked_screen_measures_the_best_as_in_full_and_leaves_only_what_cannot_rank(
     field_id: str, rank: int
 ) -> None:
-    prepared, edge_m = prepared_small(field_id)
-    headings, d = np.arange(0.0, 180.0, 1.0), 4.0
-    _, reach_m = turn_change_m(SMALL, d)
+    prepared, edge_m, headings, d, reach_m = small_at_4m(field_id)
     table = turn_table(SMALL, d)
     full = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, keep=rank)
     ranked = screen_cells(prepared, headings, d, edge_m, reach_m=reach_m, keep=rank, rank=rank)
