@@ -272,19 +272,35 @@ def plan_general(
         covers = [cover_at(a) for a in ranked]
         orders: dict[int, CellPlan] = {}
 
+        def order_cover(cover: CellCover, losses_m2: FloatArray | None) -> CellPlan:
+            # R5 within the heading: no cell turns at the ends that cost it clearly more
+            # cover, to save length.
+            excluded = None
+            if table is not None:
+                excluded = excluded_variants(cover, table, d, parity_slack_m2, losses_m2)
+            plan = order_heading(cover, start_xy, after_lines, excluded=excluded)
+            return reach_headland(plan, d) if rings else plan
+
         def cheap(i: int) -> CellPlan:
             # Ordered only when the rule asks for its length (most headings are).
             if i not in orders:
-                # R5 within the heading: no cell turns at the ends that cost it clearly
-                # more cover, to save length.
-                excluded = None
-                if table is not None:
-                    excluded = excluded_variants(
-                        covers[i], table, d, parity_slack_m2, cell_losses_m2.get(ranked[i])
-                    )
-                plan = order_heading(covers[i], start_xy, after_lines, excluded=excluded)
-                orders[i] = reach_headland(plan, d) if rings else plan
+                orders[i] = order_cover(covers[i], cell_losses_m2.get(ranked[i]))
             return orders[i]
+
+        def probe(heading_deg: float, neighbour_deg: float) -> CellPlan | None:
+            from planner.heading_screen import screen_fitted  # numba: compiled on first use
+
+            neighbour_deg %= 180.0
+            if table is not None:
+                # With a radius fitting costs most; the screen first: is the neighbour's
+                # jump in cover there at all?
+                screened = screen_fitted(
+                    prepared, [heading_deg, neighbour_deg], d, edge, table,
+                    parity_slack_m2=parity_slack_m2,
+                )  # fmt: skip
+                if not screened[1] > screened[0] + slack_m2:
+                    return None
+            return order_cover(cover_heading(prepared, neighbour_deg, d, edge), None)
 
         # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
         # the close ones fitted (ends pulled back, lines dropped, the implement's width)
@@ -319,6 +335,7 @@ def plan_general(
             interval_m=d,
             planned=planned,
             must_fit=must_fit,
+            probe=probe,
         )
         fits = chosen.fits
         best = chosen.plan
