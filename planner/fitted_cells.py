@@ -209,6 +209,9 @@ SHORTER_SHARE = 0.01
 #: 63.640°, and 4.6 % shorter than the choice there). A quarter degree: within the 1° grid,
 #: not tuned.
 PROBE_OFFSETS_DEG = (-0.25, 0.25)
+#: ``probe(heading_deg, neighbours_deg)``: each neighbour of a heading planned cheaply, or
+#: None where it is not worth fitting (:func:`choose_cells`).
+Probe = Callable[[float, Sequence[float]], list[CellPlan | None]]
 
 
 @functools.lru_cache(maxsize=256)
@@ -269,7 +272,7 @@ def choose_cells(
     interval_m: float,
     planned: int | None = None,
     must_fit: Sequence[int] = (),
-    probe: Callable[[float, float], CellPlan | None] | None = None,
+    probe: Probe | None = None,
 ) -> tuple[FittedCells, float]:
     """R5 on fitted lines, fitting as few headings as it can.
 
@@ -286,8 +289,8 @@ def choose_cells(
     never ordered. Only the first ``planned`` headings (default: all) are planned for length;
     the others were decomposed because they may cover more, and are fitted if in ``must_fit``.
 
-    ``probe(heading_deg, neighbour_deg)`` plans a neighbour of a heading cheaply, or returns
-    None if it is not worth fitting: given, the shortest fitted heading that the estimate put
+    ``probe(heading_deg, neighbours_deg)`` plans neighbours of a heading cheaply (None for one
+    not worth fitting): given, the shortest fitted heading that the estimate put
     within the slack of the best cover, that fitting left more than the slack below the best
     fitted one, and that is :data:`SHORTER_SHARE` shorter than the shortest fitted heading
     that keeps the rule, has its neighbours :data:`PROBE_OFFSETS_DEG` away fitted too (fitted
@@ -350,7 +353,7 @@ def _probed(
     estimated_m2: list[float],
     best_estimate_m2: float,
     slack_m2: float,
-    probe: Callable[[float, float], CellPlan | None],
+    probe: Probe,
     fit: Callable[[CellPlan], FittedCells],
     objective: Objective,
 ) -> list[FittedCells]:
@@ -363,19 +366,21 @@ def _probed(
     if objective != "shortest_path":
         return []
     best_m2 = max(f.covered_m2 for f in fitted.values())
-    keeping_m = min(f.length_m for f in fitted.values() if f.covered_m2 >= best_m2 - slack_m2)
+    # The rule's own choice among the fitted ones; a neighbour must save 1 % on it.
+    choice, _ = choose_fitted(list(fitted.values()), objective, slack_m2=slack_m2)
+    saving_m = choice.length_m * (1.0 - SHORTER_SHARE)
     surprised = [
         i
         for i, f in fitted.items()
         if f.covered_m2 < best_m2 - slack_m2
         and estimated_m2[i] >= best_estimate_m2 - slack_m2
-        and f.length_m < keeping_m * (1.0 - SHORTER_SHARE)
+        and f.length_m < saving_m
     ]
     if not surprised:
         return []
     # One heading's neighbours, the shortest's: fitting is most of a plan's time.
     heading = covers[min(surprised, key=lambda i: (fitted[i].length_m, i))].heading_deg
-    plans = [probe(heading, heading + offset) for offset in PROBE_OFFSETS_DEG]
+    plans = probe(heading, [heading + offset for offset in PROBE_OFFSETS_DEG])
     probed = [fit(plan) for plan in plans if plan is not None]
     # A neighbour is a candidate if R5 asks for it (it covers clearly more) or if it saves
     # the issue's 1 %: fitted lengths move cells in straight lines, and around holes the
@@ -385,7 +390,7 @@ def _probed(
         f
         for f in probed
         if f.covered_m2 > best_m2 + slack_m2
-        or (f.covered_m2 >= best_m2 - slack_m2 and f.length_m < keeping_m * (1.0 - SHORTER_SHARE))
+        or (f.covered_m2 >= best_m2 - slack_m2 and f.length_m < saving_m)
     ]
 
 

@@ -13,6 +13,7 @@ holes (:mod:`planner.routing`). Everything here is in local metres;
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -287,20 +288,23 @@ def plan_general(
                 orders[i] = order_cover(covers[i], cell_losses_m2.get(ranked[i]))
             return orders[i]
 
-        def probe(heading_deg: float, neighbour_deg: float) -> CellPlan | None:
+        def probe(heading_deg: float, neighbours_deg: Sequence[float]) -> list[CellPlan | None]:
             from planner.heading_screen import screen_fitted  # numba: compiled on first use
 
-            neighbour_deg %= 180.0
+            around = [h % 180.0 for h in neighbours_deg]
+            worth = [True] * len(around)
             if table is not None:
-                # With a radius fitting costs most; the screen first: is the neighbour's
-                # jump in cover there at all?
+                # With a radius fitting costs most; the screen first, all in one call: is a
+                # neighbour's jump in cover there at all?
                 screened = screen_fitted(
-                    prepared, [heading_deg, neighbour_deg], d, edge, table,
+                    prepared, [heading_deg, *around], d, edge, table,
                     parity_slack_m2=parity_slack_m2,
                 )  # fmt: skip
-                if not screened[1] > screened[0] + slack_m2:
-                    return None
-            return order_cover(cover_heading(prepared, neighbour_deg, d, edge), None)
+                worth = [bool(m2 > screened[0] + slack_m2) for m2 in screened[1:]]
+            return [
+                order_cover(cover_heading(prepared, h, d, edge), None) if ok else None
+                for h, ok in zip(around, worth, strict=True)
+            ]
 
         # R5 on what the vehicle covers: the headings ranked on estimated fitted figures,
         # the close ones fitted (ends pulled back, lines dropped, the implement's width)

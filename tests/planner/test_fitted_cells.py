@@ -67,9 +67,9 @@ def _probe_case(
     covers = [SimpleNamespace(heading_deg=h) for h in (10.0, 20.0, 30.0)]
     asked: list[tuple[float, float]] = []
 
-    def probe(heading_deg: float, neighbour_deg: float) -> float:
-        asked.append((heading_deg, round(neighbour_deg, 6)))
-        return round(neighbour_deg, 6)
+    def probe(heading_deg: float, neighbours_deg: list[float]) -> list[float]:
+        asked.extend((heading_deg, round(h, 6)) for h in neighbours_deg)
+        return [round(h, 6) for h in neighbours_deg]
 
     found = _probed(
         fitted, covers, estimated_m2, max(estimated_m2), SLACK_M2, probe,  # type: ignore[arg-type]
