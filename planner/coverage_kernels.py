@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from planner.kernel_helpers import _jit
+from planner.kernel_helpers import _jit, read_only
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -367,8 +367,8 @@ def _laid_out(
 
 def packed_chains(u_ring: FloatArray, v_ring: FloatArray) -> tuple[int, int, FloatArray] | None:
     """Return :func:`planner.coverage.convex_chains` packed (``_chains``), or None for numpy."""
-    u = np.ascontiguousarray(u_ring, dtype=np.float64)
-    v = np.ascontiguousarray(v_ring, dtype=np.float64)
+    u = read_only(u_ring, np.float64)
+    v = read_only(v_ring, np.float64)
     if len(u) == 0 or len(u) != len(v):
         return None
     n_lo, n_hi, packed = _chains(u, v)
@@ -392,11 +392,11 @@ def laid_out(
     if not len(v_lo) == len(v_hi) == len(u):
         return None
     ok, odd, area, cell = _laid_out(
-        packed,
-        np.ascontiguousarray(offsets, dtype=np.int64),
-        np.ascontiguousarray(u, dtype=np.float64),
-        np.ascontiguousarray(v_lo, dtype=np.float64),
-        np.ascontiguousarray(v_hi, dtype=np.float64),
+        read_only(packed, np.float64),
+        read_only(offsets, np.int64),
+        read_only(u, np.float64),
+        read_only(v_lo, np.float64),
+        read_only(v_hi, np.float64),
         float(interval_m),
     )
     return (odd, area.reshape(-1, 3), cell) if ok else None

@@ -99,6 +99,28 @@ def _jit_counted_by_caller(f: _F) -> _F:
         return cast(_F, numba.njit(error_model="numpy", **uncounted)(f))
 
 
+def read_only(values: npt.ArrayLike, dtype: type) -> npt.NDArray[Any]:
+    """``values`` as a C-contiguous, read-only array of ``dtype``: a view where it can be.
+
+    Numba compiles one version of a kernel per argument type, and an array's write flag is
+    part of its type. The heading screen's scans are read-only (the plan's cells are views
+    of them), a warm-up's arrays are not: a kernel warmed on one and first called with the
+    other compiled again, for seconds, inside a plan. A wrapper passes every array its
+    kernel only reads through this, so both meet the one version the warm-up compiled.
+
+    Examples
+    --------
+    >>> a = read_only([1, 2], np.float64)
+    >>> a.dtype.name, a.flags.writeable, a.flags.c_contiguous
+    ('float64', False, True)
+    """
+    array: npt.NDArray[Any] = np.ascontiguousarray(values, dtype=dtype)
+    if array.flags.writeable:
+        array = array.view()
+        array.flags.writeable = False
+    return array
+
+
 @_jit
 def _mn(a: float, b: float) -> float:
     """``np.minimum``: ``a`` on ties (and if ``a`` is NaN)."""

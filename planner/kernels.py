@@ -499,7 +499,10 @@ def estimated_coverage(
     widths = np.empty(len(u_raw))
     out = coverage_excess(u_raw, v_ring, interval_m, widths)
     if out is not None:
-        _less_fitting(out, widths, float(interval_m), area, field_m2, width_m, reach_m)
+        _less_fitting(
+            out, widths, float(interval_m), float(area), float(field_m2), float(width_m),
+            float(reach_m),
+        )  # fmt: skip
     return out
 
 
@@ -532,4 +535,5 @@ def warm_up() -> None:
     ring_u = np.array([[0.0, 2.0, 2.0, 0.0]])
     ring_v = np.array([[0.0, 0.0, 1.0, 1.0]])
     coverage_excess(ring_u, ring_v, 1.0)
+    estimated_coverage(ring_u, ring_v, 1.0, 2.0, field_m2=2.0, width_m=1.0, reach_m=0.5)
     length_aggregates(ring_u, ring_v, 1.0)

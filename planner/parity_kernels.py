@@ -21,7 +21,7 @@ import numpy.typing as npt
 
 from planner.coverage import Chains, packed
 from planner.fit_screen import CACHED_SLIDES, TurnTable, _fit_cell
-from planner.kernel_helpers import _jit, _jit_counted_by_caller
+from planner.kernel_helpers import _jit, _jit_counted_by_caller, read_only
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -109,16 +109,22 @@ def parity_losses_m2(
     packed_chains = [packed(c) for c in chains]
     chains_at = np.concatenate([[0], np.cumsum([len(p) for p in packed_chains])]).astype(np.int64)
     return _parity_losses(
-        np.concatenate(packed_chains) if packed_chains else np.zeros(0),
-        chains_at,
-        np.ascontiguousarray(offsets, dtype=np.int64),
-        np.ascontiguousarray(u, dtype=np.float64),
-        np.ascontiguousarray(v_lo, dtype=np.float64),
-        np.ascontiguousarray(v_hi, dtype=np.float64),
+        read_only(np.concatenate(packed_chains) if packed_chains else np.zeros(0), np.float64),
+        read_only(chains_at, np.int64),
+        read_only(offsets, np.int64),
+        read_only(u, np.float64),
+        read_only(v_lo, np.float64),
+        read_only(v_hi, np.float64),
         float(interval_m),
-        (table.offsets, table.u, table.v, table.u_lo, table.u_hi),
-        table.beyond_m,
-        table.scalars,
+        (
+            read_only(table.offsets, np.int64),
+            read_only(table.u, np.float64),
+            read_only(table.v, np.float64),
+            read_only(table.u_lo, np.float64),
+            read_only(table.u_hi, np.float64),
+        ),
+        read_only(table.beyond_m, np.float64),
+        read_only(table.scalars, np.float64),
     )
 
 
