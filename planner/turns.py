@@ -74,6 +74,13 @@ class TurnEnds:
         """Return the number of turns."""
         return len(self.x0)
 
+    def take(self, which: npt.NDArray[np.int64]) -> TurnEnds:
+        """Return the turns ``which``, in that order."""
+        return TurnEnds(
+            self.x0[which], self.y0[which], self.yaw0[which],
+            self.x1[which], self.y1[which], self.yaw1[which],
+        )  # fmt: skip
+
 
 @dataclass(frozen=True, slots=True)
 class TurnCurves:
@@ -194,6 +201,21 @@ def dubins_turn(
     """
     signs, params = dubins_words(ends, radius_m=radius_m, words=words)
     return _sample(ends, signs, params * radius_m, radius_m, step_m)
+
+
+def dubins_turn_length_m(
+    ends: TurnEnds, *, radius_m: float, words: tuple[str, ...] = tuple(DUBINS_WORDS)
+) -> FloatArray:
+    """Lengths of :func:`dubins_turn`'s curves, without sampling them [m].
+
+    Examples
+    --------
+    >>> ends = TurnEnds(*(np.array([v]) for v in (0.0, 0.0, math.pi / 2, 10.0, 0.0, -math.pi / 2)))
+    >>> round(float(dubins_turn_length_m(ends, radius_m=3.0)[0]), 4)
+    13.4248
+    """
+    _, params = dubins_words(ends, radius_m=radius_m, words=words)
+    return np.asarray(np.abs(params * radius_m).sum(axis=1), dtype=float)
 
 
 def bulb_turn(ends: TurnEnds, *, radius_m: float, step_m: float = STEP_M) -> TurnCurves:

@@ -101,3 +101,20 @@ def test_loops_keep_inside_bend_no_tighter_and_lose_nothing(field: Polygon, offs
     before = shapely.intersection(field, band_footprint(ring, width)).area
     after = shapely.intersection(field, band_footprint(looped, width)).area
     assert after >= before - 1e-6 * field.area
+
+
+@SETTINGS
+@given(convex_fields(), st.floats(0.01, 3.0), st.floats(0.1, 3.0))
+def test_resampled_ring_is_geos_interpolation(field: Polygon, grow_m: float, step_m: float) -> None:
+    """``resample_ring`` gives the points GEOS's ``line_interpolate_point`` gives, evenly spaced.
+
+    The reference walks the ring from its start for every point (the resampling once took a
+    second on a large field's rounds), so it is kept here, not in the planner.
+    """
+    ring = field.buffer(grow_m).exterior
+    points = resample_ring(ring, step_m)
+    n = len(points)
+    along = np.arange(n) * (ring.length / n)
+    expected = shapely.get_coordinates(shapely.line_interpolate_point(ring, along))
+    assert n >= max(3, int(ring.length / step_m))
+    assert np.allclose(points, expected, rtol=0.0, atol=1e-9)

@@ -21,6 +21,7 @@ from planner.turns import (
     TurnEnds,
     bulb_turn,
     dubins_turn,
+    dubins_turn_length_m,
     pivot_turn,
     reeds_shepp_turn,
 )
@@ -147,3 +148,15 @@ def test_many_turns_at_once_equal_one_at_a_time() -> None:
     for k in range(25):
         alone = dubins_turn(TurnEnds(*(v[k : k + 1] for v in values)), radius_m=2.0)
         assert np.allclose(together.curve(k), alone.curve(0))
+
+
+def test_lengths_without_sampling_and_a_subset_equal_the_sampled_turns() -> None:
+    """``dubins_turn_length_m`` is ``dubins_turn``'s length, and ``TurnEnds.take`` a subset."""
+    rng = np.random.default_rng(5)
+    ends = TurnEnds(*rng.uniform(-10, 10, (6, 40)))
+    together = dubins_turn(ends, radius_m=1.5)
+    assert np.array_equal(dubins_turn_length_m(ends, radius_m=1.5), together.length_m)
+    which = np.array([7, 3, 39, 3])
+    subset = dubins_turn(ends.take(which), radius_m=1.5)
+    for k, j in enumerate(which):
+        assert np.array_equal(subset.curve(k), together.curve(int(j)))
