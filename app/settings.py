@@ -51,8 +51,9 @@ class Settings(BaseSettings):
     backlog : int
         Connections the operating system queues before the server accepts them.
     planning_budget_s : float
-        Longest a large field (hundreds of vertices, many holes) may take to plan in one
-        request [s]; longer gets 422 naming the limit (:mod:`app.budget`).
+        Longest a large field (hundreds of vertices, many holes, or over 10 ha as a spiral)
+        may take to plan in one request [s]; longer gets 422 naming the limit
+        (:mod:`app.budget`).
     secure_cookies : bool
         Mark the session cookie ``Secure`` (sent over HTTPS only). Turn it on behind TLS.
     dask_scheduler : str or None

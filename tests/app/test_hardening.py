@@ -7,6 +7,7 @@ measure from outside, as an attacker would: the pathological request must be ans
 
 from __future__ import annotations
 
+import json
 import re
 import threading
 import time
@@ -18,10 +19,10 @@ import httpx2
 import pytest
 from starlette.testclient import TestClient
 
-from app.budget import INLINE_MAX_VERTICES
+from app.budget import INLINE_MAX_HOLES, INLINE_MAX_VERTICES
 from app.db import get_engine
 from app.testing import ServerUrl, running_server
-from tests.conftest import field_from_local
+from tests.conftest import FIELDS_DIR, field_from_local
 from tests.databases import DATABASES, scratch_pg_database
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -198,3 +199,33 @@ def test_openapi_documents_the_security_schemes(client: TestClient):
     plans = spec["paths"]["/api/plans"]["get"]
     assert {"bearerToken": []} in plans["security"]
     assert "security" not in spec["paths"]["/api/health"]["get"]
+
+
+def test_large_spiral_is_answered_within_the_budget(served: ServerUrl):
+    """A spiral's time grows with the field's area: a 130 ha real field of 76 vertices
+    (9 s to plan as a spiral) is planned with the deadline, not in the request's thread."""
+    collection = json.loads((FIELDS_DIR / "south_africa_2017.geojson").read_text())
+    [field] = [
+        f["geometry"]
+        for f in collection["features"]
+        if f["properties"].get("id") == "south_africa_2017-52"
+    ]
+    vertices = sum(len(ring) - 1 for ring in field["coordinates"])
+    holes = len(field["coordinates"]) - 1
+    assert vertices <= INLINE_MAX_VERTICES and holes <= INLINE_MAX_HOLES  # small by its size
+
+    def post() -> httpx2.Response:
+        return httpx2.post(
+            f"{served}/api/plans/preview",
+            json={"field": field, "interval_m": 4, "pattern": "spiral"},
+            headers=served.headers,
+            timeout=30,
+        )
+
+    response, seconds, health = while_health_is_polled(served, post)
+    assert seconds < ANSWER_WITHIN_S, seconds
+    assert max(health) < HEALTH_WITHIN_S, health
+    assert response.status_code == 422, response.text
+    detail = response.json()["detail"]
+    assert f"as a spiral ({vertices} vertices, {holes} holes)" in detail
+    assert f"limit of {PLANNING_BUDGET_S:g} s per request" in detail
