@@ -20,6 +20,7 @@ import time
 from multiprocessing.context import ForkServerContext
 from typing import Any, Final
 
+import shapely
 from pyproj import Geod
 from shapely import Polygon
 
@@ -100,14 +101,28 @@ class PlanningBudgetError(PlannerError):
         The field's size, named in the message.
     """
 
-    def __init__(self, budget_s: float, vertices: int, holes: int, pattern: str = "") -> None:
-        shape = f"as a {pattern} " if pattern in BUDGETED_PATTERNS else ""
-        super().__init__(
-            "field",
-            f"planning this field {shape}({vertices:,} vertices, {holes} holes) takes longer "
-            f"than the limit of {budget_s:g} s per request; simplify the boundary, or plan "
-            "it with `tillpath plan`",
-        )
+    def __init__(
+        self,
+        budget_s: float,
+        vertices: int,
+        holes: int,
+        *,
+        pattern: str = "",
+        area_ha: float | None = None,
+    ) -> None:
+        if area_ha is not None:  # budgeted for its area: the boundary is not the cause
+            message = (
+                f"planning this field of {area_ha:,.1f} ha as a {pattern} takes longer than "
+                f"the limit of {budget_s:g} s per request; plan it with another pattern, "
+                "or with `tillpath plan`"
+            )
+        else:
+            message = (
+                f"planning this field ({vertices:,} vertices, {holes} holes) takes longer "
+                f"than the limit of {budget_s:g} s per request; simplify the boundary, or "
+                "plan it with `tillpath plan`"
+            )
+        super().__init__("field", message)
 
 
 def field_size(field: Polygon) -> tuple[int, int]:
@@ -128,8 +143,12 @@ def _worker(conn: multiprocessing.connection.Connection, field: Polygon, options
 
 
 def area_ha(field_lonlat: Polygon) -> float:
-    """Return a WGS84 polygon's geodesic area [ha]."""
-    return abs(float(_WGS84.geometry_area_perimeter(field_lonlat)[0])) / 1e4
+    """Return a WGS84 polygon's geodesic area [ha], holes taken off however they wind.
+
+    pyproj sums the rings' signed areas: a hole wound as the exterior would be added.
+    """
+    oriented = shapely.orient_polygons(field_lonlat)
+    return abs(float(_WGS84.geometry_area_perimeter(oriented)[0])) / 1e4
 
 
 class ChildPlannerError(PlannerError):
@@ -160,11 +179,9 @@ def plan_coverage(field_lonlat: Polygon, *, budget_s: float, **options: Any) -> 
     """
     vertices, holes = field_size(field_lonlat)
     pattern = str(options.get("pattern") or "")
-    if (
-        vertices <= INLINE_MAX_VERTICES
-        and holes <= INLINE_MAX_HOLES
-        and (pattern not in BUDGETED_PATTERNS or area_ha(field_lonlat) <= INLINE_MAX_AREA_HA)
-    ):
+    large = vertices > INLINE_MAX_VERTICES or holes > INLINE_MAX_HOLES
+    area = area_ha(field_lonlat) if pattern in BUDGETED_PATTERNS else 0.0
+    if not large and area <= INLINE_MAX_AREA_HA:
         return planner.plan_coverage(field_lonlat, **options)
     deadline = time.monotonic() + budget_s  # the process's start counts against the budget
     receiver, sender = _context().Pipe(duplex=False)
@@ -173,7 +190,9 @@ def plan_coverage(field_lonlat: Polygon, *, budget_s: float, **options: Any) -> 
     sender.close()
     try:
         if not receiver.poll(max(0.0, deadline - time.monotonic())):
-            raise PlanningBudgetError(budget_s, vertices, holes, pattern)
+            raise PlanningBudgetError(
+                budget_s, vertices, holes, pattern=pattern, area_ha=None if large else area
+            )
         kind, value = receiver.recv()
     except EOFError:
         raise RuntimeError("the planning process ended without an answer") from None

@@ -74,6 +74,8 @@ MAX_ROUNDS = 200
 FOOTPRINT_TOLERANCE_M = 1e-4
 #: The core's boundary is simplified by this much, inside itself [m].
 CORE_TOLERANCE_M = 0.002
+#: ... if it has more vertices than this.
+CORE_SIMPLE_VERTICES = 400
 #: Room the body keeps from the boundary in the joins' check, inside R1's 1 cm [m].
 _BODY_MARGIN_M = 0.002
 #: Candidate joins checked exactly (chords and all), cheapest first.
@@ -186,17 +188,7 @@ def order_spiral(
         core_parts = polygon_parts(field_local)
     # A core piece narrower than the body holds no line it could drive: the rounds cover it.
     core_parts = [p for p in core_parts if not p.buffer(-half).is_empty]
-    # The core's boundary follows the rounds' arcs, a vertex every few centimetres, and the
-    # router between its cells grows with the square of its corners (4 of a 21 ha field's
-    # 5 s). Simplified within CORE_TOLERANCE_M inside itself, it loses that much width.
-    core_parts = [
-        q
-        for p in core_parts
-        for q in polygon_parts(
-            p.buffer(-CORE_TOLERANCE_M, join_style="mitre").simplify(CORE_TOLERANCE_M)
-        )
-        if not q.buffer(-half).is_empty
-    ]
+    core_parts = [q for p in core_parts for q in _simplified_core(p, half)]
 
     route = RouteBuilder()
     if start_xy is not None:
@@ -272,6 +264,28 @@ def order_spiral(
         coverage_ratio=min(covered / field_area, 1.0),
         cells_local=cells,
     )
+
+
+def _simplified_core(part: Polygon, half_width_m: float) -> list[Polygon]:
+    """Return a core part with fewer vertices: shrunk and simplified by CORE_TOLERANCE_M.
+
+    The core's boundary follows the rounds' arcs, a vertex every few centimetres, and the
+    router between its cells grows with the square of its corners (4 of a 21 ha field's
+    5 s). Shrunk by the tolerance and simplified by as much, it stays within a fraction of a
+    millimetre of ``part`` (simplifying may cut a corner that far out; the core lies half an
+    interval inside the last round). Where that would part it, or leave a piece too narrow
+    for the body that was not, ``part`` is kept as it is; so is a part of at most
+    :data:`CORE_SIMPLE_VERTICES` vertices, which routes fast as it is (on a strip the body
+    barely fits, 2 mm off each side would cost coverage: 0.5 pp of a 0.86 m strip).
+    """
+    if shapely.get_num_coordinates(part) <= CORE_SIMPLE_VERTICES:
+        return [part]
+    shrunk = polygon_parts(
+        part.buffer(-CORE_TOLERANCE_M, join_style="mitre").simplify(CORE_TOLERANCE_M)
+    )
+    if len(shrunk) == 1 and not shrunk[0].buffer(-half_width_m).is_empty:
+        return shrunk
+    return [part]
 
 
 def _round_levels(

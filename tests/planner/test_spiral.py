@@ -6,12 +6,13 @@ import json
 import math
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely import LineString, Polygon
 
-from planner import parse_field_geojson, plan_coverage
+from planner import parse_field_geojson, plan_coverage, spiral
 from planner.export import plan_to_geojson
 from planner.projection import field_frame
 from planner.types import CoveragePlan
@@ -152,3 +153,24 @@ def test_unknown_pattern_is_refused_by_name(square_field: Polygon) -> None:
         assert str(error).startswith("pattern:")
     else:
         raise AssertionError("an unknown pattern was accepted")
+
+
+@pytest.mark.parametrize(
+    ("vehicle", "width_m"),
+    [("hand_tractor", 0.855), ("hand_tractor", 8.855), ("small_tractor", 1.302)],
+)
+def test_a_core_the_body_barely_fits_is_planned_as_without_simplifying(
+    vehicle: str, width_m: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The core's boundary is simplified 2 mm inside itself only where it has many vertices:
+    on a 60 m strip the body barely fits, shrinking it lost the core's line (or all of it)."""
+    field = shapely.box(0.0, 0.0, 60.0, width_m)
+
+    def summary() -> tuple[int, int, float]:
+        plan = spiral.order_spiral(field, interval_m=4.0, vehicle=vehicle)
+        return plan.round_count, plan.line_count, plan.coverage_ratio
+
+    simplified = summary()
+    monkeypatch.setattr(spiral, "CORE_TOLERANCE_M", 0.0)
+    assert simplified == summary()
+    assert simplified[1] >= 1
