@@ -33,9 +33,9 @@ INLINE_MAX_VERTICES: Final = 400
 #: Fields with up to this many holes are planned in the request's thread.
 INLINE_MAX_HOLES: Final = 10
 #: Patterns whose time grows with the field's area (a spiral's rounds), not its vertices:
-#: 8.9 s for a real 130 ha field of 76 vertices, at most 0.25 s for the real fields up to
-#: 10 ha (measured on every ninth real field, two vehicles). Past this area they are planned
-#: with the deadline.
+#: 9 s for a real 130 ha field of 76 vertices, at most 0.24 s for the real fields up to
+#: 10 ha (``python -m bench.spiral_times``: every ninth real field, two vehicles). Past this
+#: area they are planned with the deadline.
 BUDGETED_PATTERNS: Final = frozenset({"spiral"})
 #: ... fields up to this area [ha] are planned in the request's thread in every pattern.
 INLINE_MAX_AREA_HA: Final = 10.0

@@ -28,6 +28,7 @@ def main() -> None:
     fields = [f for name in DATASETS for f in load(name)][1::9]
     warm_up()
     figures: dict[str, list[object]] = {}
+    times: list[float] = []
     for vehicle in args.vehicles:
         for name, field in fields:
             started = time.perf_counter()
@@ -40,9 +41,9 @@ def main() -> None:
             except PlannerError as exc:
                 result = [f"refused: {exc}"]
             seconds = time.perf_counter() - started
+            times.append(seconds)
             figures[f"{vehicle} {name}"] = [*result, round(seconds, 3)]
             print(f"{vehicle:14} {name:24} {seconds:7.2f} s  {result}", flush=True)
-    times = [float(str(v[-1])) for v in figures.values()]
     print(f"{len(times)} plans: {sum(times):.1f} s in all, the slowest {max(times):.2f} s")
     if args.json:
         args.json.write_text(json.dumps(figures, indent=0))

@@ -168,7 +168,7 @@ def resample_ring(ring: LinearRing, step_m: float) -> FloatArray:
     """
     coords = np.asarray(ring.coords, dtype=float)
     # Distance along the ring at each vertex. GEOS's ``line_interpolate_point`` walks the
-    # ring from its start for every point (a second on a 16 ha field's rounds); one
+    # ring from its start for every point (4.5 s of a 16 ha field's 12 s spiral); one
     # searchsorted over the cumulative lengths is linear.
     at_vertex = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(coords, axis=0).T))))
     length = float(at_vertex[-1])

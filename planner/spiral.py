@@ -472,7 +472,9 @@ class _Joiner:
         to_xy: FloatArray,
         to_yaw: FloatArray,
     ) -> int | None:
-        """Index of the cheapest candidate join that keeps the body inside, and its curve.
+        """Index of the cheapest candidate join that keeps the body inside (None if none).
+
+        Its curve is left in ``self._curve``.
 
         The candidates are taken cheapest first (curve length plus the distance driven on
         along the round), in batches that grow: the joins' lengths are closed forms, but
