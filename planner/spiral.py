@@ -86,6 +86,9 @@ _FIRST_BATCH = 64
 _LAST_BATCH = 4096
 #: The first test of a batch looks at one point in this many.
 _SPARSE_STRIDE = 16
+#: Where no curve reaches the core's start, it is planned from this many other points of
+#: the last round.
+_CORE_ENTRIES = 4
 
 
 @dataclass(frozen=True, slots=True)
@@ -201,6 +204,19 @@ def order_spiral(
             joiner.add_round(ring, round_index)
             round_index += 1
 
+    def _core_plan(part: Polygon, start: tuple[float, float] | None) -> general.GeneralPlan:
+        return general.plan_general(
+            part,
+            interval_m=d,
+            start_xy=start,
+            finish_xy=finish_xy,
+            fixed_heading_deg=None,
+            objective=objective,
+            headland_passes=0,
+            vehicle=machine,
+            implement_width_m=implement,
+        )
+
     heading = 0.0
     line_count = 0
     cells: list[Polygon] = []
@@ -209,20 +225,19 @@ def order_spiral(
     refused: InvalidParameterError | None = None
     for part in core_parts:
         try:
-            core = general.plan_general(
-                part,
-                interval_m=d,
-                start_xy=joiner.position(),
-                finish_xy=finish_xy,
-                fixed_heading_deg=None,
-                objective=objective,
-                headland_passes=0,
-                vehicle=machine,
-                implement_width_m=implement,
-            )
+            core = _core_plan(part, joiner.position())
         except InvalidParameterError as error:
             refused = refused or error
             continue  # a core too small for the vehicle's turns: the rounds cover round it
+        # The core is entered where its plan starts, near the round's entry. Where no curve
+        # reaches that pose inside the field, the core is planned from other points of the
+        # round (so it starts at another corner) until one is reached.
+        if not joiner.reaches(core.route):
+            for entry in joiner.other_entries(_CORE_ENTRIES):
+                other = _core_plan(part, entry)
+                if joiner.reaches(other.route):
+                    core = other
+                    break
         joiner.add_core(core.route)
         heading = core.heading_deg
         line_count += core.line_count
@@ -357,6 +372,8 @@ class _Joiner:
         #: The round being driven, its points from the entry on, and its round index.
         self.ring: FloatArray | None = None
         self.ring_index: int | None = None
+        #: The core :meth:`reaches` looked at last, and the join it found (None: none).
+        self._reached: tuple[RouteBuilder, tuple[FloatArray, int] | None] | None = None
 
     def position(self) -> tuple[float, float] | None:
         """Where the vehicle is once the current round is driven (its entry point)."""
@@ -392,9 +409,9 @@ class _Joiner:
         start = 1 if core.roles and core.roles[0] == "start" else 0  # the core's own start leg
         first = np.array([core.x[start], core.y[start]])
         if self.ring is not None:
-            nxt = np.array([core.x[start + 1], core.y[start + 1]])
-            yaw = math.atan2(*(nxt - first)[::-1])
-            curve, extra = self._join_to_pose(first, yaw)
+            first, yaw = _core_pose(core)
+            found = self._reached[1] if self._reached and self._reached[0] is core else None
+            curve, extra = found if found is not None else self._join_to_pose(first, yaw)
             self._leave_round(extra, curve, last_role=core.roles[start])
             self.ring = None
             self.route.lines[-1] = core.lines[start]
@@ -421,6 +438,31 @@ class _Joiner:
             if a < start:
                 continue  # the core's start leg: replaced by the move above
             route.segments.append((kind, index, a - start + offset, b - start + offset))
+
+    def reaches(self, core: RouteBuilder) -> bool:
+        """Whether a drivable curve joins the round driven last to ``core``'s first pose.
+
+        True with no round to leave: there is nothing to join.
+        """
+        if self.ring is None or not core.x:
+            return True
+        first, yaw = _core_pose(core)
+        dep_xy, dep_yaw, along = self._departures()
+        n = len(dep_xy)
+        k = self._best(
+            dep_xy, dep_yaw, along, np.repeat(first[None, :], n, axis=0), np.full(n, yaw)
+        )
+        # add_core joins the core it is given; the search for this one is not done twice.
+        self._reached = (core, None if k is None else (self._curve, k))
+        return k is not None
+
+    def other_entries(self, count: int) -> list[tuple[float, float]]:
+        """``count`` points spread along the round driven last, past its entry."""
+        if self.ring is None:
+            return []
+        n = len(self.ring)
+        picks = (np.arange(1, count + 1) * n) // (count + 1)
+        return [(float(self.ring[i, 0]), float(self.ring[i, 1])) for i in picks]
 
     def finish(self) -> None:
         """Drive the last round once round if nothing follows it."""
@@ -553,6 +595,14 @@ class _Joiner:
         as every other turn (R1).
         """
         return densify(self.router.path(here, there), STEP_M)
+
+
+def _core_pose(core: RouteBuilder) -> tuple[FloatArray, float]:
+    """Where and heading which way the core's route starts (past its own start leg)."""
+    start = 1 if core.roles and core.roles[0] == "start" else 0
+    first = np.array([core.x[start], core.y[start]])
+    nxt = np.array([core.x[start + 1], core.y[start + 1]])
+    return first, math.atan2(*(nxt - first)[::-1])
 
 
 def _nearest(points: FloatArray, xy: FloatArray) -> int:

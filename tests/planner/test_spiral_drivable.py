@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely import LineString, Polygon
 
-from planner import parse_field_geojson, plan_coverage
+from planner import parse_field_geojson, plan_coverage, spiral
 from planner.projection import field_frame
 from planner.types import CoveragePlan
 from planner.vehicles import PRESETS
@@ -118,33 +118,32 @@ FOUND_FIELDS = [
 ]
 
 
-#: A field whose spiral (small tractor, 1.5 m) joins its core by the routed fallback.
+#: A field whose spiral (small tractor, 1.5 m) cannot reach its core's first plan: no curve
+#: from the last round arrives at the first line's start, heading along it, inside the field.
 ROUTED_JOIN = (12, 60.0, 7, [2.0])
 
 
-def test_a_routed_join_keeps_its_points_close_and_the_body_inside() -> None:
-    """The fallback join (no Dubins curve inside the field): points ≤ 0.5 m apart (were 22.6
-    m), body inside; its corners are the open weakness of the test below.
-
-    The field is one whose core, at the heading the planner now chooses, is joined by the
-    fallback (seed 1 with a 1 m hole was, until its core's heading changed with the fitted
-    screen of issue 9).
-    """
+def test_a_routed_join_keeps_its_points_close_and_the_body_inside(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The last resort where no entry to the core is reached (no other entry is tried here):
+    the routed move, its points ≤ 0.5 m apart (were 22.6 m) and the body inside; its corners
+    are more than the turning radius can take, which is why the core is tried from other
+    entries first (the test below)."""
+    monkeypatch.setattr(spiral, "_CORE_ENTRIES", 0)
     field = round_holes_field(*ROUTED_JOIN, convex=False)
     plan = plan_coverage(
         field_from_local(field), interval_m=1.5, pattern="spiral", vehicle="small_tractor"
     )
     assert_spiral_drivable(plan, curvature=False)
+    with pytest.raises(AssertionError):
+        assert_spiral_drivable(plan)  # the corners: this field does need another entry
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "known weakness, open (issue 9): where no Dubins curve joins two rounds inside the "
-        "field, the join falls back to the routed move, whose corners a 3 m radius cannot take"
-    ),
-)
-def test_a_routed_join_is_drivable_with_the_turning_radius() -> None:
+def test_a_core_no_curve_reaches_is_entered_elsewhere_and_driven_within_the_radius() -> None:
+    """The core planned from the round's entry starts where no curve arrives inside the
+    field (the test above); it is planned again from other points of the round, and the one
+    a curve reaches is driven: every join within the turning radius, the body inside."""
     field = round_holes_field(*ROUTED_JOIN, convex=False)
     plan = plan_coverage(
         field_from_local(field), interval_m=1.5, pattern="spiral", vehicle="small_tractor"
