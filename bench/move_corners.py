@@ -1,0 +1,90 @@
+"""How many turns between lines a vehicle with a turning radius cannot drive as exported (R1).
+
+``python -m bench.move_corners [VEHICLE] [--limit K]`` plans every real field of
+:mod:`bench.bench_fields` at its 4 m interval (VEHICLE defaults to ``small_tractor``) and
+looks at each turn between two lines as the vehicle would drive it (a vehicle with a
+turning radius: one that pivots drives a corner on the spot): the turn's points with
+a point half a metre back along the line it leaves and half a metre on along the line it
+joins, so that a heading that jumps where the turn meets a line counts too. A turn is
+*sharp* where the circle through three consecutive points is tighter than the turning
+radius allows (the tolerance of ``tests/planner/plan_checks.py``). Turns within a cell are
+held to the radius by the tests; the sharp ones are moves between cells, which are the
+vehicle's own curve only where that stays inside the machine area and otherwise the
+shortest path inside it (:func:`planner.cell_route.moves_between_cells`). Not part of
+``make bench``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from bench.bench_fields import DATASETS, INTERVAL_M, load
+from planner import PlannerError, plan_coverage
+from planner.projection import field_frame
+
+#: Points this far along the lines on either side are added to each turn [m].
+SEAM_M = 0.5
+
+
+def curvatures(points: np.ndarray) -> np.ndarray:
+    """Curvature [1/m] of the circle through every three consecutive points (steps ≥ 5 cm)."""
+    a, b, c = points[:-2], points[1:-1], points[2:]
+    ab, bc, ca = (np.hypot(*(q - p).T) for p, q in ((a, b), (b, c), (c, a)))
+    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    ok = (ab > 0.05) & (bc > 0.05) & (ca > 0.05)
+    return np.asarray(2.0 * cross[ok] / (ab * bc * ca)[ok])
+
+
+def sharp_turns(field: object, vehicle: str) -> tuple[int, int]:
+    """Plan ``field``; return its turns between lines and how many of them are sharp."""
+    plan = plan_coverage(field, interval_m=INTERVAL_M, vehicle=vehicle)  # type: ignore[arg-type]
+    assert plan.vehicle is not None
+    radius = plan.vehicle.min_turn_radius_m or plan.vehicle.track_m / 2.0
+    frame = field_frame(plan.field_lonlat)
+    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
+    kinds = [s.kind for s in plan.segments]
+    turns = sharp = 0
+    for k in range(1, len(kinds) - 1):
+        if kinds[k] != "turn" or kinds[k - 1] != "line" or kinds[k + 1] != "line":
+            continue
+        before, turn, after = local[k - 1], local[k], local[k + 1]
+        back = before[-1] - before[0]
+        on = after[-1] - after[0]
+        back_m, on_m = float(np.hypot(*back)), float(np.hypot(*on))
+        if back_m <= 0.0 or on_m <= 0.0:
+            continue
+        seam = np.vstack(
+            [
+                turn[:1] - back / back_m * min(SEAM_M, back_m),
+                turn,
+                turn[-1:] + on / on_m * min(SEAM_M, on_m),
+            ]
+        )
+        turns += 1
+        sharp += bool((curvatures(seam) > 1.0 / radius * 1.02 + 0.02).any())
+    return turns, sharp
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(prog="python -m bench.move_corners")
+    parser.add_argument("vehicle", nargs="?", default="small_tractor")
+    parser.add_argument("--limit", type=int, default=None, help="only the first LIMIT fields")
+    args = parser.parse_args()
+    fields = [(fid, f) for name in DATASETS for fid, f in load(name)][: args.limit]
+    turns = sharp = with_sharp = 0
+    for _, field in fields:
+        try:
+            t, s = sharp_turns(field, args.vehicle)
+        except PlannerError:
+            continue
+        turns, sharp, with_sharp = turns + t, sharp + s, with_sharp + (s > 0)
+    print(
+        f"{args.vehicle}, {len(fields)} fields at {INTERVAL_M:g} m: {sharp} of {turns} turns "
+        f"between lines tighter than the turning radius, on {with_sharp} fields"
+    )
+
+
+if __name__ == "__main__":
+    main()
