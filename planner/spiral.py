@@ -23,9 +23,11 @@ Rounds are joined, and the last round to the core, by forward Dubins curves at t
 (:func:`planner.turns.dubins_turn`): after a full round the vehicle drives on along it until a
 lane change to the next round (or the move to the core's first line) fits inside the field for
 its body, so the route is one continuous, drivable path: each segment begins where the one
-before it ends. Only where no such curve is found (a join that would have to wind round an
-obstacle) does the join fall back to the shortest move inside the field
-(:class:`planner.routing.FieldRouter`), with corners.
+before it ends. Where no curve reaches the core's first line, the core is planned again from
+up to :data:`_CORE_ENTRIES` other points of the last round (its start then usually moves to
+another corner), and the first plan a curve reaches is driven. Only where no such curve is
+found (a join that would have to wind round an obstacle) does the join fall back to the
+shortest move inside the field (:class:`planner.routing.FieldRouter`), with corners.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from shapely import LinearRing, MultiPolygon, Polygon
 
 from planner import general
-from planner.errors import InvalidParameterError
+from planner.errors import InvalidParameterError, PlannerError
 from planner.general import RouteBuilder
 from planner.headlands import polygon_parts
 from planner.line_ends import machine_area
@@ -230,15 +232,26 @@ def order_spiral(
             refused = refused or error
             continue  # a core too small for the vehicle's turns: the rounds cover round it
         # The core is entered where its plan starts, near the round's entry. Where no curve
-        # reaches that pose inside the field, the core is planned from other points of the
-        # round (so it starts at another corner) until one is reached.
-        if not joiner.reaches(core.route):
+        # reaches that pose inside the field, the core is planned from up to _CORE_ENTRIES
+        # other points of the round, which usually moves its start to another corner; the
+        # first plan a curve reaches is driven (its heading may differ, its coverage is the
+        # plan's own). Else the join is routed, with corners.
+        join = joiner.core_join(core.route)
+        if join is None and joiner.in_round and core.route.x:
+            tried = {_core_pose_key(core.route)}
             for entry in joiner.other_entries(_CORE_ENTRIES):
-                other = _core_plan(part, entry)
-                if joiner.reaches(other.route):
-                    core = other
+                try:
+                    other = _core_plan(part, entry)
+                except PlannerError:
+                    continue  # the first plan stands, with its routed join
+                if _core_pose_key(other.route) in tried:
+                    continue  # the same start: the same join, not found
+                tried.add(_core_pose_key(other.route))
+                other_join = joiner.core_join(other.route)
+                if other_join is not None:
+                    core, join = other, other_join
                     break
-        joiner.add_core(core.route)
+        joiner.add_core(core.route, join)
         heading = core.heading_deg
         line_count += core.line_count
         cells.extend(core.cells_local)
@@ -372,8 +385,6 @@ class _Joiner:
         #: The round being driven, its points from the entry on, and its round index.
         self.ring: FloatArray | None = None
         self.ring_index: int | None = None
-        #: The core :meth:`reaches` looked at last, and the join it found (None: none).
-        self._reached: tuple[RouteBuilder, tuple[FloatArray, int] | None] | None = None
 
     def position(self) -> tuple[float, float] | None:
         """Where the vehicle is once the current round is driven (its entry point)."""
@@ -402,16 +413,18 @@ class _Joiner:
         self._leave_round(extra, curve)
         self.ring, self.ring_index = np.roll(points, -arrive, axis=0), index
 
-    def add_core(self, core: RouteBuilder) -> None:
-        """Append the core's route, reached by a drivable join from the round driven last."""
+    def add_core(self, core: RouteBuilder, join: tuple[FloatArray, int] | None) -> None:
+        """Append the core's route, joined to the round driven last by ``join``.
+
+        ``join``: :meth:`core_join`'s curve and extra points; None for the routed move (with
+        corners) where no curve reaches the core.
+        """
         if not core.x:
             return
-        start = 1 if core.roles and core.roles[0] == "start" else 0  # the core's own start leg
+        start = _core_start(core)
         first = np.array([core.x[start], core.y[start]])
         if self.ring is not None:
-            first, yaw = _core_pose(core)
-            found = self._reached[1] if self._reached and self._reached[0] is core else None
-            curve, extra = found if found is not None else self._join_to_pose(first, yaw)
+            curve, extra = join if join is not None else (self._routed_from_round(first), 0)
             self._leave_round(extra, curve, last_role=core.roles[start])
             self.ring = None
             self.route.lines[-1] = core.lines[start]
@@ -439,30 +452,35 @@ class _Joiner:
                 continue  # the core's start leg: replaced by the move above
             route.segments.append((kind, index, a - start + offset, b - start + offset))
 
-    def reaches(self, core: RouteBuilder) -> bool:
-        """Whether a drivable curve joins the round driven last to ``core``'s first pose.
+    @property
+    def in_round(self) -> bool:
+        """Whether a round is being driven (the core is then joined to it)."""
+        return self.ring is not None
 
-        True with no round to leave: there is nothing to join.
+    def core_join(self, core: RouteBuilder) -> tuple[FloatArray, int] | None:
+        """Find the drivable join from the round driven last to ``core``'s first pose.
+
+        Returns the curve and the extra points driven on along the round before it
+        (:meth:`_best`); None where no curve reaches the pose inside the field, and where
+        no round is being driven or the core is empty (nothing to join).
         """
         if self.ring is None or not core.x:
-            return True
-        first, yaw = _core_pose(core)
+            return None
+        first, yaw_rad = _core_pose(core)
         dep_xy, dep_yaw, along = self._departures()
         n = len(dep_xy)
         k = self._best(
-            dep_xy, dep_yaw, along, np.repeat(first[None, :], n, axis=0), np.full(n, yaw)
+            dep_xy, dep_yaw, along, np.repeat(first[None, :], n, axis=0), np.full(n, yaw_rad)
         )
-        # add_core joins the core it is given; the search for this one is not done twice.
-        self._reached = (core, None if k is None else (self._curve, k))
-        return k is not None
+        return None if k is None else (self._curve, k)
 
     def other_entries(self, count: int) -> list[tuple[float, float]]:
-        """``count`` points spread along the round driven last, past its entry."""
+        """Up to ``count`` points spread along the round driven last, its entry left out."""
         if self.ring is None:
             return []
         n = len(self.ring)
-        picks = (np.arange(1, count + 1) * n) // (count + 1)
-        return [(float(self.ring[i, 0]), float(self.ring[i, 1])) for i in picks]
+        picks = np.unique((np.arange(1, count + 1) * n) // (count + 1))
+        return [(float(self.ring[i, 0]), float(self.ring[i, 1])) for i in picks if i > 0]
 
     def finish(self) -> None:
         """Drive the last round once round if nothing follows it."""
@@ -577,15 +595,10 @@ class _Joiner:
         path = self._routed(tuple(self.ring[0]), tuple(points[target]))
         return path, 0, target
 
-    def _join_to_pose(self, xy: FloatArray, yaw: float) -> tuple[FloatArray, int]:
-        """Join the current round to the pose ``(xy, yaw)``: curve and extra points."""
-        dep_xy, dep_yaw, along = self._departures()
-        n = len(dep_xy)
-        k = self._best(dep_xy, dep_yaw, along, np.repeat(xy[None, :], n, axis=0), np.full(n, yaw))
-        if k is not None:
-            return self._curve, k
+    def _routed_from_round(self, xy: FloatArray) -> FloatArray:
+        """Return the routed move from the current round's entry to ``xy`` (no curve reaches it)."""
         assert self.ring is not None
-        return self._routed(tuple(self.ring[0]), tuple(xy)), 0
+        return self._routed(tuple(self.ring[0]), (float(xy[0]), float(xy[1])))
 
     def _routed(self, here: tuple[float, float], there: tuple[float, float]) -> FloatArray:
         """Return the shortest move inside the field, as points at most :data:`STEP_M` apart.
@@ -597,12 +610,23 @@ class _Joiner:
         return densify(self.router.path(here, there), STEP_M)
 
 
+def _core_start(core: RouteBuilder) -> int:
+    """Index of the core route's first point past its own start leg (replaced by the join)."""
+    return 1 if core.roles and core.roles[0] == "start" else 0
+
+
 def _core_pose(core: RouteBuilder) -> tuple[FloatArray, float]:
-    """Where and heading which way the core's route starts (past its own start leg)."""
-    start = 1 if core.roles and core.roles[0] == "start" else 0
+    """Where the core's route starts, local [m], and its heading there [rad]."""
+    start = _core_start(core)
     first = np.array([core.x[start], core.y[start]])
     nxt = np.array([core.x[start + 1], core.y[start + 1]])
     return first, math.atan2(*(nxt - first)[::-1])
+
+
+def _core_pose_key(core: RouteBuilder) -> tuple[float, float, float]:
+    """Return the core's first pose as a key: two plans that start alike are joined alike."""
+    first, yaw_rad = _core_pose(core)
+    return float(first[0]), float(first[1]), yaw_rad
 
 
 def _nearest(points: FloatArray, xy: FloatArray) -> int:
