@@ -32,7 +32,9 @@ shortest move inside the field (:class:`planner.routing.FieldRouter`), with corn
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -231,26 +233,7 @@ def order_spiral(
         except InvalidParameterError as error:
             refused = refused or error
             continue  # a core too small for the vehicle's turns: the rounds cover round it
-        # The core is entered where its plan starts, near the round's entry. Where no curve
-        # reaches that pose inside the field, the core is planned from up to _CORE_ENTRIES
-        # other points of the round, which usually moves its start to another corner; the
-        # first plan a curve reaches is driven (its heading may differ, its coverage is the
-        # plan's own). Else the join is routed, with corners.
-        join = joiner.core_join(core.route)
-        if join is None and joiner.in_round and core.route.x:
-            tried = {_core_pose_key(core.route)}
-            for entry in joiner.other_entries(_CORE_ENTRIES):
-                try:
-                    other = _core_plan(part, entry)
-                except PlannerError:
-                    continue  # the first plan stands, with its routed join
-                if _core_pose_key(other.route) in tried:
-                    continue  # the same start: the same join, not found
-                tried.add(_core_pose_key(other.route))
-                other_join = joiner.core_join(other.route)
-                if other_join is not None:
-                    core, join = other, other_join
-                    break
+        core, join = _entered_core(core, joiner, functools.partial(_core_plan, part))
         joiner.add_core(core.route, join)
         heading = core.heading_deg
         line_count += core.line_count
@@ -292,6 +275,38 @@ def order_spiral(
         coverage_ratio=min(covered / field_area, 1.0),
         cells_local=cells,
     )
+
+
+def _entered_core(
+    core: general.GeneralPlan,
+    joiner: _Joiner,
+    plan_from: Callable[[tuple[float, float]], general.GeneralPlan],
+) -> tuple[general.GeneralPlan, tuple[FloatArray, int] | None]:
+    """Return the core plan to drive and its join from the round driven last.
+
+    The core is entered where its plan starts, near the round's entry. Where no curve reaches
+    that pose inside the field, the core is planned again (``plan_from(entry)``) from up to
+    :data:`_CORE_ENTRIES` other points of the round, which usually moves its start to another
+    corner; the first plan a curve reaches is driven (its heading may differ, its coverage is
+    the plan's own). Else ``core`` stands, with no join (:meth:`_Joiner.add_core` routes it).
+    """
+    join = joiner.core_join(core.route)
+    if join is not None or not joiner.in_round or not core.route.x:
+        return core, join
+    tried = {_core_pose_key(core.route)}
+    for entry in joiner.other_entries(_CORE_ENTRIES):
+        try:
+            other = plan_from(entry)
+        except PlannerError:
+            continue  # the first plan stands, with its routed join
+        key = _core_pose_key(other.route)
+        if key in tried:
+            continue  # the same start: the same join, not found
+        tried.add(key)
+        other_join = joiner.core_join(other.route)
+        if other_join is not None:
+            return other, other_join
+    return core, None
 
 
 def _simplified_core(part: Polygon, half_width_m: float) -> list[Polygon]:
@@ -592,8 +607,7 @@ class _Joiner:
         # No drivable join found: the shortest move inside the field, with corners.
         target = _nearest(points, self.ring[0]) if self.ring is not None else 0
         assert self.ring is not None
-        path = self._routed(tuple(self.ring[0]), tuple(points[target]))
-        return path, 0, target
+        return self._routed_from_round(points[target]), 0, target
 
     def _routed_from_round(self, xy: FloatArray) -> FloatArray:
         """Return the routed move from the current round's entry to ``xy`` (no curve reaches it)."""
