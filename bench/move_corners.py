@@ -8,10 +8,10 @@ a point half a metre back along the line it leaves and half a metre on along the
 joins, so that a heading that jumps where the turn meets a line counts too. A turn is
 *sharp* where the circle through three consecutive points is tighter than the turning
 radius allows (the tolerance of ``tests/planner/plan_checks.py``). Turns within a cell are
-held to the radius by the tests; the sharp ones are moves between cells, which are the
-vehicle's own curve only where that stays inside the machine area and otherwise the
-shortest path inside it (:func:`planner.cell_route.moves_between_cells`). Not part of
-``make bench``.
+held to the radius by the tests; the sharp ones are moves between cells for which no curve
+was found, even with the lines shortened (:mod:`planner.move_curves`): the shortest path
+inside the machine area, with corners (:func:`planner.cell_route.moves_between_cells`).
+Not part of ``make bench``.
 """
 
 from __future__ import annotations

@@ -22,13 +22,14 @@ import numpy.typing as npt
 from shapely import MultiPolygon, Polygon
 
 from planner.cell_plans import CellCover, CellPlan
-from planner.cell_route import CellFits, fit_cells
+from planner.cell_route import CellFits, DrivenCells, drive_cells, fit_cells
 from planner.decomposition import SweepRings
 from planner.fit_screen import TurnTable
 from planner.footprints import cell_lines, cells_and_band_m2, lines_in_cells_m2
 from planner.line_ends import FittedLines
 from planner.lines import from_sweep
 from planner.parity_kernels import parity_choice, parity_losses_m2
+from planner.routing import FieldRouter, path_length
 from planner.turn_reach import end_reach_m
 from planner.turns import TurnEnds, vehicle_turns
 from planner.types import Objective, Pattern, Vehicle
@@ -55,13 +56,17 @@ class FittedCells:
     covered_m2 : float
         Area of the field the implement covers on the fitted lines (R4) [m²].
     length_m : float
-        Fitted lines, their turns, straight moves between cells and the start and finish
+        Fitted lines, their turns, the moves between cells and the start and finish
         legs [m].
     line_count : int
         Lines driven.
     cells_m2 : float
         Area of the cells the fitted lines cover, each an interval wide: the measure of the
         cheap plans (:func:`estimate`) [m²].
+    driven : DrivenCells or None
+        The lines as driven (shortened where a move between cells needs room) and the
+        moves, on which the figures above are measured, for the route to reuse
+        (:func:`drive_candidate`); None before that: the figures count straight moves.
     """
 
     plan: CellPlan
@@ -70,6 +75,7 @@ class FittedCells:
     length_m: float
     line_count: int
     cells_m2: float
+    driven: DrivenCells | None = None
 
 
 def fit_candidate(
@@ -86,6 +92,8 @@ def fit_candidate(
     finish_xy: tuple[float, float] | None,
 ) -> FittedCells:
     """Fit ``plan``'s cells for ``vehicle`` and measure coverage and length on them.
+
+    The moves between cells count as straight; :func:`drive_candidate` plans them.
 
     Parameters
     ----------
@@ -115,6 +123,69 @@ def fit_candidate(
         turning_room=turning_room,
         fits=fits,
     )
+    return _measured(
+        plan,
+        fits,
+        fitted,
+        None,
+        field_local=field_local,
+        area=area,
+        interval_m=interval_m,
+        implement_width_m=implement_width_m,
+        start_xy=start_xy,
+        finish_xy=finish_xy,
+    )
+
+
+def drive_candidate(
+    candidate: FittedCells,
+    router: FieldRouter,
+    *,
+    field_local: Polygon,
+    area: Polygon | MultiPolygon,
+    interval_m: float,
+    implement_width_m: float,
+    vehicle: Vehicle,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> FittedCells:
+    """Plan a fitted heading's moves between cells and measure it again on the lines as driven.
+
+    A vehicle with a turning radius gives up line length to those moves
+    (:func:`planner.cell_route.drive_cells`, in ``router``'s machine area): the coverage and
+    the length are measured again on the shortened lines and the moves' curves. The other
+    arguments are :func:`fit_candidate`'s.
+    """
+    fitted = [candidate.fits[key] for key in candidate.plan.order]
+    driven = drive_cells(candidate.plan, fitted, router, vehicle=vehicle)
+    return _measured(
+        candidate.plan,
+        candidate.fits,
+        driven.fitted,
+        driven,
+        field_local=field_local,
+        area=area,
+        interval_m=interval_m,
+        implement_width_m=implement_width_m,
+        start_xy=start_xy,
+        finish_xy=finish_xy,
+    )
+
+
+def _measured(
+    plan: CellPlan,
+    fits: CellFits,
+    fitted: list[FittedLines],
+    driven: DrivenCells | None,
+    *,
+    field_local: Polygon,
+    area: Polygon | MultiPolygon,
+    interval_m: float,
+    implement_width_m: float,
+    start_xy: tuple[float, float] | None,
+    finish_xy: tuple[float, float] | None,
+) -> FittedCells:
+    """Measure coverage and length of ``fitted`` (in driving order), with ``driven``'s moves."""
     inside_m2, band_m2 = cells_and_band_m2(
         plan, fitted, field_local, area, plan.heading_deg, implement_width_m
     )
@@ -124,14 +195,58 @@ def fit_candidate(
         cells_m2 = inside_m2
     else:
         cells_m2 = cells_covered_m2(plan, fitted, interval_m)
+    moves = None if driven is None else driven.moves
     return FittedCells(
         plan,
         fits,
         inside_m2 + band_m2,
-        fitted_length_m(fitted, plan.heading_deg, start_xy, finish_xy),
+        fitted_length_m(fitted, plan.heading_deg, start_xy, finish_xy, moves=moves),
         sum(len(f.u) for f in fitted),
         cells_m2,
+        driven,
     )
+
+
+def choose_driven(
+    candidates: list[FittedCells],
+    objective: Objective,
+    *,
+    slack_m2: float,
+    drive: Callable[[FittedCells], FittedCells],
+) -> tuple[FittedCells, float]:
+    """Apply R5 (:func:`choose_fitted`) to fitted headings as driven, planning few of them.
+
+    Driving a heading (``drive``: its moves between cells planned, :func:`drive_candidate`)
+    only lowers its coverage, so the choice is driven, then every heading that could still
+    cover more than the slack beyond it, and the rule applied again, until the choice is
+    driven and no heading not driven could beat it by the slack. Most fields stop at the
+    first: the moves cost the choice less than the slack.
+
+    Returns
+    -------
+    chosen : FittedCells
+        Driven.
+    given_up_m2 : float
+        Area it covers less than the best heading [m²], driven or (covering no more than
+        the slack beyond the choice) not.
+    """
+    pool = list(candidates)
+    is_driven = [False] * len(pool)
+    while True:
+        chosen, given_up_m2 = choose_fitted(pool, objective, slack_m2=slack_m2)
+        at = next(i for i, c in enumerate(pool) if c is chosen)
+        if not is_driven[at]:
+            pool[at], is_driven[at] = drive(chosen), True
+            continue
+        threats = [
+            i
+            for i, c in enumerate(pool)
+            if not is_driven[i] and c.covered_m2 > chosen.covered_m2 + slack_m2
+        ]
+        if not threats:
+            return chosen, given_up_m2
+        for i in threats:
+            pool[i], is_driven[i] = drive(pool[i]), True
 
 
 def cells_covered_m2(plan: CellPlan, fitted: list[FittedLines], width_m: float) -> float:
@@ -176,18 +291,27 @@ def fitted_length_m(
     heading: float,
     start_xy: tuple[float, float] | None,
     finish_xy: tuple[float, float] | None,
+    *,
+    moves: list[FloatArray] | None = None,
 ) -> float:
-    """Length of fitted cells in driving order: lines, turns, straight moves, legs [m]."""
+    """Length of fitted cells in driving order: lines, turns, moves, legs [m].
+
+    The moves between cells are ``moves`` (local [m]) if given, else straight.
+    """
     total = 0.0
     here = None if start_xy is None else np.asarray(start_xy, dtype=float)
+    first = True
     for fit in fitted:
         if len(fit.u) == 0:
             continue
         total += float(np.abs(fit.v_end - fit.v_start).sum()) + float(fit.turns.length_m.sum())
         entry = np.asarray(from_sweep(fit.u[0], fit.v_start[0], heading), dtype=float)
-        if here is not None:
+        if here is not None and (first or moves is None):
             total += float(np.hypot(*(entry - here)))
+        first = False
         here = np.asarray(from_sweep(fit.u[-1], fit.v_end[-1], heading), dtype=float)
+    if moves is not None:
+        total += sum(path_length(move) for move in moves)
     if finish_xy is not None and here is not None:
         total += float(np.hypot(*(here - np.asarray(finish_xy, dtype=float))))
     return total
@@ -209,6 +333,9 @@ SHORTER_SHARE = 0.01
 #: 63.640°, and 4.6 % shorter than the choice there). A quarter degree: within the 1° grid,
 #: not tuned.
 PROBE_OFFSETS_DEG = (-0.25, 0.25)
+#: A choice whose moves between cells cost more than the rule's slack has its neighbours
+#: this far either side fitted and driven too [deg] (:func:`choose_cells`).
+MOVE_PROBE_OFFSETS_DEG = (-1.0, 1.0)
 #: ``probe(heading_deg, neighbours_deg)``: each neighbour of a heading planned cheaply, or
 #: None where it is not worth fitting (:func:`choose_cells`).
 Probe = Callable[[float, Sequence[float]], list[CellPlan | None]]
@@ -273,6 +400,8 @@ def choose_cells(
     planned: int | None = None,
     must_fit: Sequence[int] = (),
     probe: Probe | None = None,
+    drive: Callable[[FittedCells], FittedCells] | None = None,
+    near: Callable[[float, Sequence[float]], list[CellPlan]] | None = None,
 ) -> tuple[FittedCells, float]:
     """R5 on fitted lines, fitting as few headings as it can.
 
@@ -295,6 +424,13 @@ def choose_cells(
     fitted one, and that is :data:`SHORTER_SHARE` shorter than the shortest fitted heading
     that keeps the rule, has its neighbours :data:`PROBE_OFFSETS_DEG` away fitted too (fitted
     coverage is discontinuous in the heading).
+
+    ``drive``, given (a vehicle with a turning radius), plans a fitted heading's moves between
+    cells, which shorten its lines: the rule is then held on headings as driven
+    (:func:`choose_driven`). If the moves cost the choice more than the slack, its
+    neighbours :data:`MOVE_PROBE_OFFSETS_DEG` away (``near(heading_deg, neighbours_deg)``
+    plans them cheaply) are fitted and driven too: what the moves cost jumps from one
+    heading to the next, where a cell's last line comes to end in another corner.
 
     Returns
     -------
@@ -344,7 +480,25 @@ def choose_cells(
     candidates = [fitted[i] for i in sorted(fitted, key=key)]
     if probe is not None:
         candidates += _probed(fitted, covers, covered, best_m2, slack_m2, probe, fit, objective)
-    return choose_fitted(candidates, objective, slack_m2=slack_m2)
+    if drive is None:
+        return choose_fitted(candidates, objective, slack_m2=slack_m2)
+    drove: dict[int, FittedCells] = {}  # by id of the fitted heading: each driven once
+
+    def drive_once(candidate: FittedCells) -> FittedCells:
+        if id(candidate) not in drove:
+            drove[id(candidate)] = drive(candidate)
+        return drove[id(candidate)]
+
+    chosen, given_up_m2 = choose_driven(candidates, objective, slack_m2=slack_m2, drive=drive_once)
+    before = next((c for c in candidates if c.plan is chosen.plan), chosen)
+    if near is not None and before.covered_m2 - chosen.covered_m2 > slack_m2:
+        heading = chosen.plan.heading_deg
+        around = near(heading, [heading + offset for offset in MOVE_PROBE_OFFSETS_DEG])
+        candidates += [fit(plan) for plan in around]
+        chosen, given_up_m2 = choose_driven(
+            candidates, objective, slack_m2=slack_m2, drive=drive_once
+        )
+    return chosen, given_up_m2
 
 
 def _probed(

@@ -42,6 +42,7 @@ from planner.fitted_cells import (
     FittedCells,
     choose_cells,
     cover_picks,
+    drive_candidate,
     excluded_variants,
     fit_candidate,
 )
@@ -329,6 +330,28 @@ def plan_general(
                 finish_xy=after_lines,
             )
 
+        def drive(candidate: FittedCells) -> FittedCells:
+            # The moves between cells of a vehicle with a turning radius shorten its lines.
+            return drive_candidate(
+                candidate,
+                router,
+                field_local=field_local,
+                area=area,
+                interval_m=d,
+                implement_width_m=implement,
+                vehicle=machine,
+                start_xy=start_xy,
+                finish_xy=after_lines,
+            )
+
+        def neighbours(heading_deg: float, neighbours_deg: Sequence[float]) -> list[CellPlan]:
+            return [
+                order_cover(cover_heading(prepared, h % 180.0, d, edge), None)
+                for h in neighbours_deg
+            ]
+
+        drives = machine.min_turn_radius_m > 0.0
+
         chosen, given_up_m2 = choose_cells(
             covers,
             cheap,
@@ -340,6 +363,8 @@ def plan_general(
             planned=planned,
             must_fit=must_fit,
             probe=probe,
+            drive=drive if drives else None,
+            near=neighbours if fixed_heading_deg is None else None,
         )
         fits = chosen.fits
         best = chosen.plan
@@ -352,7 +377,7 @@ def plan_general(
             if reordered.order != best.order:
                 # Another order drives other line directions, whose fitted ends differ: it
                 # is kept only if it covers as much as the heading R5 was held on.
-                refit = fit(reordered)
+                refit = drive(fit(reordered)) if drives else fit(reordered)
                 if refit.covered_m2 >= chosen.covered_m2 - _SAME_COVER_M2:
                     best, chosen, fits = reordered, refit, refit.fits
 
@@ -374,6 +399,7 @@ def plan_general(
             interval_m=d,
             turning_room=turning_room,
             fits=fits,
+            driven=chosen.driven if chosen is not None and chosen.plan is best else None,
         )
         line_count = sum(len(fit.u) for fit in fitted)
         for cell_index, _ in best.order:
@@ -425,8 +451,10 @@ def _drives_fitted_lines(
     """Whether the route drives the chosen heading's fitted lines as fitted (same cell order)."""
     if best is not chosen.plan or len(fitted) != len(best.order):
         return False
-    for f, key in zip(fitted, best.order, strict=True):
-        g = chosen.fits.get(key)
+    measured: list[FittedLines | None] = [chosen.fits.get(key) for key in best.order]
+    if chosen.driven is not None:
+        measured = list(chosen.driven.fitted)  # as driven: shortened for moves between cells
+    for f, g in zip(fitted, measured, strict=True):
         if g is None or not (f.u is g.u and f.v_start is g.v_start and f.v_end is g.v_end):
             return False
     return True

@@ -96,6 +96,14 @@ class FieldRouter:
         """
         return self._interior.polylines(paths)
 
+    def holds_points(self, points: FloatArray) -> npt.NDArray[np.bool_]:
+        """Whether each of ``points`` (shape (k, 2), local [m]) lies inside the field.
+
+        A quick screen of many curves' points (no point objects made) before
+        :meth:`inside_paths` tests the few that pass, chords and all.
+        """
+        return self._interior.holds(points)
+
     def _snap(self, point: FloatArray, covered: bool | None = None) -> FloatArray:
         """Return ``point``, or its nearest point of the field if it lies just outside.
 

@@ -77,6 +77,11 @@ class FieldInterior:
         lines = shapely.linestrings(points[:, ::-1] if self._swap else points, indices=owner)
         return np.asarray(shapely.contains_properly(self._test, lines))
 
+    def holds(self, points: FloatArray) -> BoolArray:
+        """Whether each of ``points`` (shape (k, 2)) lies in the (grown) field's interior."""
+        x, y = (points[:, 1], points[:, 0]) if self._swap else (points[:, 0], points[:, 1])
+        return np.asarray(shapely.contains_xy(self._test, x, y))
+
     def covers(self, points: FloatArray) -> BoolArray:
         """Whether the (grown) field covers each of ``points`` (shape (k, 2)), in one call."""
         return np.asarray(

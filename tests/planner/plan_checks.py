@@ -137,8 +137,9 @@ def turn_curvatures(curve: np.ndarray) -> np.ndarray:
 def assert_turns_drivable(plan: CoveragePlan) -> None:
     """R1: turns between lines are curves the vehicle drives: points ≤ 0.5 m apart and,
     between two lines of one cell, curvature ≤ 1 / radius (the minimum turning radius, or
-    half the track for a vehicle that pivots). Moves between cells that must wind round
-    the field's corners are shortest paths inside it, with corners (checked for spacing)."""
+    half the track for a vehicle that pivots). Moves between cells are checked for spacing
+    only: where no curve is found (:mod:`planner.move_curves`) they are the shortest path
+    inside the field, with corners (``python -m bench.move_corners`` counts them)."""
     vehicle = plan_vehicle(plan)
     radius = vehicle.min_turn_radius_m or vehicle.track_m / 2.0
     for turn, same_cell in line_to_line_turns(plan):

@@ -1,0 +1,419 @@
+"""Moves between cells that a vehicle with a turning radius drives: curves, not corners.
+
+A cell's last line runs to the machine area's edge, and the next cell's first line starts at
+it: no forward curve leaves the one or reaches the other inside the field, so the shortest
+move between them has corners. Here the two lines give up some of their length instead, as
+:func:`planner.line_ends.fit_lines` pulls line ends back for the turns within a cell: the
+move leaves the line it ends ``pulled_back_m`` before the line's end and joins the next
+line ``pushed_on_m`` after its start, the least total length that lets a curve through
+(coverage traded for a path the machine can drive, as R1 asks). The curve is the vehicle's
+own turn between the two poses, or a chain of turns through poses beside the shortest
+path's corners, each held off its corner by a fraction of the radius on the outside of the
+bend (a shortest path hugs the corners it bends round; a curve through the corner would
+cut into the hole or the bund there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from planner.routing import FieldRouter
+from planner.turns import TurnCurves, TurnEnds, turning_radius_m, vehicle_turns
+from planner.types import Vehicle
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+#: A chain through poses beside a route's corners: the poses (x, y, yaw) and the curve
+#: from the first to the last, local [m].
+Chain = tuple[FloatArray, FloatArray]
+
+#: How far a move may pull back the line it leaves, and push on the start of the line it
+#: joins, in turning radii: each pair of these is tried, least total first.
+PULL_STEPS_R = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 16.0 / 3.0, 20.0 / 3.0, 25.0 / 3.0, 10.0)
+#: A pull found on those steps is tried again at this many parts of the step below it.
+REFINE_STEPS = 4
+#: How far the poses of a chain sit off the shortest path's corners, in turning radii.
+CORNER_OFFSETS_R = (0.5, 1.0, 1.5)
+#: The pairs of pull-backs tried in each batch, by index (most moves need one of the first).
+_PAIR_BATCHES = (0, 8, 24, 56, len(PULL_STEPS_R) ** 2)
+#: Curves are screened on this many points at either end first (where most leave) ...
+_END_POINTS = 6
+#: ... then on one point in this many (1.5 m apart), before the exact test.
+_SCREEN_STRIDE = 3
+
+
+@dataclass(frozen=True, slots=True)
+class DrivenMoves:
+    """Curves found for moves between cells, and what they cost the lines they join.
+
+    Attributes
+    ----------
+    curves : list of ndarray or None
+        Each move's points, from its pulled-back start to its pushed-on end, local [m];
+        None where no curve was found (the caller routes that move with corners).
+    pulled_back_m, pushed_on_m : ndarray, shape (k,)
+        How much earlier the line a move leaves ends, and how much later the line it joins
+        starts [m] (0 where no curve was found).
+    routes : list of ndarray or None
+        The shortest path inside the field between each move's unpulled ends, where it was
+        needed (every move without a curve has it), local [m].
+    """
+
+    curves: list[FloatArray | None]
+    pulled_back_m: FloatArray
+    pushed_on_m: FloatArray
+    routes: list[FloatArray | None]
+
+
+def pull_pairs_m(radius_m: float) -> FloatArray:
+    """Every pair (pull back, push on) [m] a move may cost its lines, cheapest first.
+
+    Sorted by the total, then by the pull-back: the line lengths given up, and among equal
+    totals the one that keeps more of the line driven last.
+    """
+    steps = np.asarray(PULL_STEPS_R) * radius_m
+    back, on = np.meshgrid(steps, steps, indexing="ij")
+    pairs = np.stack([back.ravel(), on.ravel()], axis=1)
+    order = np.lexsort((pairs[:, 0], pairs.sum(axis=1)))
+    return np.asarray(pairs[order])
+
+
+def drivable_moves(
+    ends: TurnEnds,
+    *,
+    back_room_m: FloatArray,
+    on_room_m: FloatArray,
+    router: FieldRouter,
+    vehicle: Vehicle,
+) -> DrivenMoves:
+    """Find a curve the vehicle drives inside the field for each move between cells.
+
+    A move is the vehicle's own turn between its pulled-back ends, or a chain of turns
+    through poses off the corners of the shortest path between its ends, whichever costs
+    the lines less: the first pair of :func:`pull_pairs_m`, within the room its lines
+    leave, whose curve stays inside the field.
+
+    Parameters
+    ----------
+    ends : TurnEnds
+        Each move's unpulled ends: the end of the line it leaves, the start of the line it
+        joins, and their headings, local [m] and [rad].
+    back_room_m, on_room_m : ndarray, shape (k,)
+        The most each move may pull back the line it leaves and push on the line it joins [m].
+    router : FieldRouter
+        The machine area the curves stay in, and the shortest paths in it.
+    vehicle : Vehicle
+        A vehicle with a turning radius.
+
+    Returns
+    -------
+    DrivenMoves
+    """
+    count = len(ends)
+    pairs = pull_pairs_m(turning_radius_m(vehicle))
+    fits = (pairs[None, :, 0] <= back_room_m[:, None] + 1e-9) & (
+        pairs[None, :, 1] <= on_room_m[:, None] + 1e-9
+    )
+    curves: list[FloatArray | None] = [None] * count
+    used = np.full(count, len(pairs), dtype=np.int64)  # the pair each found curve costs
+    routes: list[FloatArray | None] = [None] * count
+    through: list[Chain | None] = [None] * count  # the chain a curve runs through, if any
+    for first, stop in zip(_PAIR_BATCHES[:-1], _PAIR_BATCHES[1:], strict=True):
+        if first == _PAIR_BATCHES[1]:
+            # The moves the cheapest pulls do not serve: their shortest paths, and chains
+            # through them, which then bound the pulls the turn is tried at.
+            todo = np.flatnonzero(used == len(pairs))
+            paths = router.paths(
+                np.stack([ends.x0[todo], ends.y0[todo]], axis=1),
+                np.stack([ends.x1[todo], ends.y1[todo]], axis=1),
+            )
+            for k, path in zip(todo.tolist(), paths, strict=True):
+                routes[k] = path
+            chained, cost, chains = _chained(
+                ends.take(todo), fits[todo], pairs, paths, router, vehicle
+            )
+            for j, k in enumerate(todo.tolist()):
+                curves[k], used[k], through[k] = chained[j], cost[j], chains[j]
+        todo = np.flatnonzero(used > first)
+        if len(todo) == 0:
+            break
+        cheaper = fits[todo, first:stop] & (np.arange(first, stop)[None, :] < used[todo, None])
+        move, pair = np.nonzero(cheaper)
+        move, pair = todo[move], pair + first  # move-major, each move's pairs in order
+        if len(move) == 0:
+            continue
+        turns = vehicle_turns(_pulled_ends(ends, move, pairs[pair]), vehicle)
+        for t in _first_inside(move, turns, router):
+            k = int(move[t])
+            curves[k] = turns.curve(t).copy()
+            used[k] = pair[t]
+    found = used < len(pairs)
+    at = np.minimum(used, len(pairs) - 1)
+    pulls = np.where(found[:, None], pairs[at], 0.0)
+    _refine(ends, curves, pulls, through, router, vehicle)
+    return DrivenMoves(curves, pulls[:, 0], pulls[:, 1], routes)
+
+
+def _refine(
+    ends: TurnEnds,
+    curves: list[FloatArray | None],
+    pulls_m: FloatArray,
+    through: list[Chain | None],
+    router: FieldRouter,
+    vehicle: Vehicle,
+) -> None:
+    """Pull each found move's lines back less, where a curve still fits: in place.
+
+    The pulls were found on the coarse steps of :data:`PULL_STEPS_R`; each of the two is
+    tried again at :data:`REFINE_STEPS` - 1 points between the step below and itself, the
+    pull-back first, least first, keeping the other.
+    """
+    steps = np.asarray(PULL_STEPS_R) * turning_radius_m(vehicle)
+    for side in (0, 1):
+        found = [k for k, curve in enumerate(curves) if curve is not None and pulls_m[k, side] > 0]
+        if not found:
+            return
+        now = pulls_m[found, side]
+        below = steps[np.maximum(np.searchsorted(steps, now - 1e-9) - 1, 0)]
+        share = np.arange(1, REFINE_STEPS) / REFINE_STEPS
+        move = np.repeat(np.array(found, dtype=np.int64), len(share))
+        tried = pulls_m[move].copy()
+        tried[:, side] = (below[:, None] + (now - below)[:, None] * share[None, :]).ravel()
+        for t, curve in _try_pairs(ends, move, tried, through, router, vehicle).items():
+            k = int(move[t])
+            curves[k] = curve
+            pulls_m[k] = tried[t]
+
+
+def _try_pairs(
+    ends: TurnEnds,
+    move: IntArray,
+    pulls_m: FloatArray,
+    through: list[Chain | None],
+    router: FieldRouter,
+    vehicle: Vehicle,
+) -> dict[int, FloatArray]:
+    """Return each move's first candidate whose curve stays inside, by candidate, with it.
+
+    Candidate ``t`` pulls move ``move[t]``'s lines by ``pulls_m[t]`` (back, on); a move's
+    candidates are consecutive, cheapest first. Its curve is the vehicle's turn between the
+    pulled ends, or, for a move with a chain in ``through``, the legs to and from the chain.
+    """
+    out: dict[int, FloatArray] = {}
+    chained = np.array([through[k] is not None for k in move.tolist()], dtype=bool)
+    direct = np.flatnonzero(~chained)
+    if len(direct):
+        turns = vehicle_turns(_pulled_ends(ends, move[direct], pulls_m[direct]), vehicle)
+        for t in _first_inside(move[direct], turns, router):
+            out[int(direct[t])] = turns.curve(t).copy()
+    legs = np.flatnonzero(chained)
+    if len(legs):
+        chains = [through[k] for k in move[legs].tolist()]
+        pulled = _pulled_ends(ends, move[legs], pulls_m[legs])
+        a = np.array([chain[0][0] for chain in chains if chain is not None])
+        b = np.array([chain[0][-1] for chain in chains if chain is not None])
+        into = vehicle_turns(
+            TurnEnds(pulled.x0, pulled.y0, pulled.yaw0, a[:, 0], a[:, 1], a[:, 2]), vehicle
+        )
+        out_of = vehicle_turns(
+            TurnEnds(b[:, 0], b[:, 1], b[:, 2], pulled.x1, pulled.y1, pulled.yaw1), vehicle
+        )
+        passing = _screened_inside(into, router) & _screened_inside(out_of, router)
+        done: set[int] = set()
+        for j in np.flatnonzero(passing).tolist():
+            k = int(move[legs[j]])
+            chain = chains[j]
+            if k in done or chain is None:
+                continue
+            curve = np.vstack([into.curve(j), chain[1][1:], out_of.curve(j)[1:]])
+            if router.inside_path(curve):
+                out[int(legs[j])] = curve
+                done.add(k)
+    return out
+
+
+def _chained(
+    ends: TurnEnds,
+    fits: npt.NDArray[np.bool_],
+    pairs: FloatArray,
+    routes: list[FloatArray],
+    router: FieldRouter,
+    vehicle: Vehicle,
+) -> tuple[list[FloatArray | None], IntArray, list[Chain | None]]:
+    """Find each move's cheapest chain through poses beside its shortest path's corners.
+
+    Returns the curves (None where none is found), the index in ``pairs`` of the pull each
+    costs (``len(pairs)`` where none is found) and the chains they run through. Each offset of
+    :data:`CORNER_OFFSETS_R` is tried in turn on the moves still without a chain. A chain's
+    first leg depends only on the pull-back and its last only on the push-on: each is
+    planned once per step of :data:`PULL_STEPS_R`.
+    """
+    count = len(ends)
+    radius = turning_radius_m(vehicle)
+    curves: list[FloatArray | None] = [None] * count
+    through: list[Chain | None] = [None] * count
+    used = np.full(count, len(pairs), dtype=np.int64)
+    steps = np.asarray(PULL_STEPS_R) * radius
+    step_of = {float(x): i for i, x in enumerate(steps)}
+    pair_steps = np.array([[step_of[float(x)] for x in pair] for pair in pairs], dtype=np.int64)
+    for offset_r in CORNER_OFFSETS_R:
+        todo = np.array(
+            [k for k in range(count) if curves[k] is None and len(routes[k]) > 2], dtype=np.int64
+        )
+        chains = _corner_chains([routes[k] for k in todo], offset_r * radius, router, vehicle)
+        kept = [(int(todo[j]), chain) for j, chain in enumerate(chains) if chain is not None]
+        if not kept:
+            continue
+        move = np.array([k for k, _ in kept], dtype=np.int64)
+        first_pose = np.array([chain[0][0] for _, chain in kept])  # each chain's first pose
+        last_pose = np.array([chain[0][-1] for _, chain in kept])  # and its last
+        n, m = len(kept), len(steps)
+        who = np.repeat(np.arange(n), m)
+        zero = np.zeros(n * m)
+        start = _pulled_ends(ends, move[who], np.stack([np.tile(steps, n), zero], axis=1))
+        end = _pulled_ends(ends, move[who], np.stack([zero, np.tile(steps, n)], axis=1))
+        a, b = first_pose[who], last_pose[who]
+        into = vehicle_turns(
+            TurnEnds(start.x0, start.y0, start.yaw0, a[:, 0], a[:, 1], a[:, 2]), vehicle
+        )
+        out_of = vehicle_turns(
+            TurnEnds(b[:, 0], b[:, 1], b[:, 2], end.x1, end.y1, end.yaw1), vehicle
+        )
+        into_ok = _screened_inside(into, router).reshape(n, m)
+        out_ok = _screened_inside(out_of, router).reshape(n, m)
+        # Each move's pairs that its room allows and both legs pass, cheapest first.
+        passing = fits[move] & into_ok[:, pair_steps[:, 0]] & out_ok[:, pair_steps[:, 1]]
+        for j, p in zip(*np.nonzero(passing), strict=True):
+            k = int(move[j])
+            if curves[k] is not None:
+                continue
+            s_i, t_i = (int(i) for i in pair_steps[p])
+            curve = np.vstack(
+                [into.curve(j * m + s_i), kept[j][1][1][1:], out_of.curve(j * m + t_i)[1:]]
+            )
+            if router.inside_path(curve):
+                curves[k], used[k], through[k] = curve, p, kept[j][1]
+    return curves, used, through
+
+
+def _first_inside(move: IntArray, turns: TurnCurves, router: FieldRouter) -> list[int]:
+    """Return, for each move, its first candidate curve that stays inside (if any).
+
+    Curve ``t`` of ``turns`` belongs to ``move[t]``; a move's curves are consecutive,
+    cheapest first. All are screened (:func:`_screened_inside`); each move's curves that
+    pass are then tested exactly, chords and all, cheapest first, until one stays inside.
+    """
+    chosen: list[int] = []
+    done: set[int] = set()
+    for t in np.flatnonzero(_screened_inside(turns, router)).tolist():
+        k = int(move[t])
+        if k not in done and router.inside_path(turns.curve(t)):
+            chosen.append(t)
+            done.add(k)
+    return chosen
+
+
+def _screened_inside(curves: TurnCurves, router: FieldRouter) -> npt.NDArray[np.bool_]:
+    """Whether each curve passes a screen of its points: likely inside, if not surely.
+
+    Its points at either end first (:func:`_ends_inside`), then one in
+    :data:`_SCREEN_STRIDE` of the curves that passed: most curves that leave the field are
+    turned away for few point tests, and an exact test follows on the few that pass.
+    """
+    inside = _ends_inside(curves, router)
+    counts = curves.point_counts()
+    owner = np.repeat(np.arange(len(curves)), counts)
+    rank = np.arange(len(owner)) - np.repeat(curves.offsets[:-1], counts)
+    keep = inside[owner] & (rank % _SCREEN_STRIDE == 0)
+    inside[owner[keep][~router.holds_points(curves.xy[keep])]] = False
+    return inside
+
+
+def _ends_inside(curves: TurnCurves, router: FieldRouter) -> npt.NDArray[np.bool_]:
+    """Whether the first and last :data:`_END_POINTS` points of each curve lie inside.
+
+    Where a move leaves a line at the field's edge, or joins one, is where its curves
+    leave the field, if they do: a screen of few points that turns most of them away.
+    """
+    counts = curves.point_counts()
+    step = np.minimum(np.arange(_END_POINTS)[None, :], counts[:, None] - 1)
+    index = np.concatenate(
+        [curves.offsets[:-1, None] + step, curves.offsets[1:, None] - 1 - step], axis=1
+    )
+    held = router.holds_points(curves.xy[index.ravel()])
+    return np.asarray(held.reshape(index.shape).all(axis=1))
+
+
+def _pulled_ends(ends: TurnEnds, move: IntArray, pairs_m: FloatArray) -> TurnEnds:
+    """Return ``ends`` of ``move``, starts pulled back and ends pushed on by ``pairs_m``."""
+    taken = ends.take(move)
+    back, on = pairs_m[:, 0], pairs_m[:, 1]
+    return TurnEnds(
+        taken.x0 - back * np.cos(taken.yaw0),
+        taken.y0 - back * np.sin(taken.yaw0),
+        taken.yaw0,
+        taken.x1 + on * np.cos(taken.yaw1),
+        taken.y1 + on * np.sin(taken.yaw1),
+        taken.yaw1,
+    )
+
+
+def _corner_chains(
+    routes: list[FloatArray], offset_m: float, router: FieldRouter, vehicle: Vehicle
+) -> list[Chain | None]:
+    """Poses beside each route's corners and the curve through them, if it stays inside.
+
+    Each pose sits ``offset_m`` off its corner on the outside of the bend, heading along
+    the bisector of the two legs. Returns per route the poses (shape (c, 3): x, y, yaw) and
+    the curve from the first to the last (just the first pose's point if there is one
+    corner); None if the route has no bend or a corner is degenerate, or if the curve
+    leaves the field. Every route's curves are planned in one call and tested in another.
+    """
+    poses: list[FloatArray | None] = []
+    for route in routes:
+        into = route[1:-1] - route[:-2]
+        out_of = route[2:] - route[1:-1]
+        into_m = np.hypot(*into.T)
+        out_of_m = np.hypot(*out_of.T)
+        if len(into) == 0 or (into_m < 1e-9).any() or (out_of_m < 1e-9).any():
+            poses.append(None)
+            continue
+        into, out_of = into / into_m[:, None], out_of / out_of_m[:, None]
+        outward = into - out_of  # away from the corner the path bends round
+        outward_m = np.hypot(*outward.T)
+        bends = outward_m > 1e-9
+        if not bends.any():
+            poses.append(None)
+            continue
+        tangent = into + out_of
+        xy = route[1:-1][bends] + offset_m * outward[bends] / outward_m[bends, None]
+        yaw = np.arctan2(tangent[bends, 1], tangent[bends, 0])
+        poses.append(np.column_stack([xy, yaw]))
+    between = [p for p in poses if p is not None and len(p) > 1]
+    chains: list[Chain | None] = [None] * len(routes)
+    pieces: list[FloatArray] = []
+    ok: list[bool] = []
+    if between:
+        a = np.concatenate([p[:-1] for p in between])
+        b = np.concatenate([p[1:] for p in between])
+        turns = vehicle_turns(
+            TurnEnds(a[:, 0], a[:, 1], a[:, 2], b[:, 0], b[:, 1], b[:, 2]), vehicle
+        )
+        pieces = [turns.curve(t) for t in range(len(turns))]
+        ok = router.inside_paths(pieces).tolist()
+    used = 0
+    for j, p in enumerate(poses):
+        if p is None:
+            continue
+        if len(p) == 1:
+            chains[j] = (p, p[:1, :2].copy())
+            continue
+        mine = slice(used, used + len(p) - 1)
+        used += len(p) - 1
+        if all(ok[mine]):
+            chain = pieces[mine]
+            chains[j] = (p, np.vstack([chain[0], *(piece[1:] for piece in chain[1:])]))
+    return chains
