@@ -158,16 +158,23 @@ def drive_cells(
     last_u = np.array([fit.u[-1] for fit in driven[:-1]])
     x0, y0 = from_sweep(first_u, first_v, heading)
     x1, y1 = from_sweep(last_u, np.array([fit.v_end[-1] for fit in driven[:-1]]), heading)
-    xb, yb = from_sweep(last_u, np.array([fit.v_start[-1] for fit in driven[:-1]]), heading)
     first_m = np.array([abs(fit.v_end[0] - fit.v_start[0]) for fit in driven[1:]])
     last_m = np.array([abs(fit.v_end[-1] - fit.v_start[-1]) for fit in driven[:-1]])
+    xb, yb = from_sweep(last_u, np.array([fit.v_start[-1] for fit in driven[:-1]]), heading)
+    # Lines run along the heading (+v is (sin h, cos h) in local x, y) or against it; a
+    # move leaves its line in the direction from the line's start to its end.
+    theta = math.radians(heading)
+    along = math.atan2(math.cos(theta), math.sin(theta))
+    leaving = np.array([fit.v_end[-1] >= fit.v_start[-1] for fit in driven[:-1]], dtype=bool)
+    joining = np.array([fit.v_end[0] >= fit.v_start[0] for fit in driven[1:]], dtype=bool)
+    here_yaw = np.where(
+        last_m > 1e-9, np.arctan2(y1 - yb, x1 - xb), np.where(leaving, along, along + math.pi)
+    )
     moves, pulled_back, pushed_on = moves_between_cells(
         np.stack([x1, y1], axis=1),
-        np.stack([xb, yb], axis=1),
-        np.ones(len(driven) - 1, dtype=bool),
+        here_yaw,
         np.stack([x0, y0], axis=1),
-        np.array([fit.v_end[0] >= fit.v_start[0] for fit in driven[1:]], dtype=bool),
-        heading=heading,
+        np.where(joining, along, along + math.pi),
         router=router,
         vehicle=vehicle,
         back_room_m=np.maximum((last_m - _KEPT_LINE_M) / 2.0, 0.0),
@@ -286,44 +293,38 @@ def room_chains(cell: Cell, room: Polygon | MultiPolygon | None) -> Chains:
 
 def moves_between_cells(
     here_xy: FloatArray,
-    before_xy: FloatArray,
-    leaves_line: npt.NDArray[np.bool_],
+    here_yaw_rad: FloatArray,
     target_xy: FloatArray,
-    up: npt.NDArray[np.bool_],
+    target_yaw_rad: FloatArray,
     *,
-    heading: float,
     router: FieldRouter,
     vehicle: Vehicle,
-    back_room_m: FloatArray | None = None,
-    on_room_m: FloatArray | None = None,
+    back_room_m: FloatArray,
+    on_room_m: FloatArray,
 ) -> tuple[list[FloatArray], FloatArray, FloatArray]:
     """Plan the moves from line ends to other cells' first line starts.
 
-    Move ``k`` leaves ``here_xy[k]``, the end of the line from ``before_xy[k]`` (if
-    ``leaves_line[k]``), for ``target_xy[k]``, where a line runs along the heading (``up[k]``)
-    or against it. Each is the vehicle's own turn (a Dubins or pivot curve from pose to pose)
-    if it stays inside the machine area. Else a vehicle that pivots takes the shortest path
-    inside it, with points at most 0.5 m apart, and turns its corners on the spot; one with
-    a turning radius takes a curve that gives up some of the lines' length
+    Move ``k`` leaves ``here_xy[k]``, the end of a line driven at ``here_yaw_rad[k]``, for
+    ``target_xy[k]``, the start of a line driven at ``target_yaw_rad[k]``. Each is the
+    vehicle's own turn (a Dubins or pivot curve from pose to pose) if it stays inside the
+    machine area; the turns are planned in one call and tested in another. Else a vehicle
+    that pivots takes the shortest path inside it (:meth:`planner.routing.FieldRouter.paths`),
+    with points at most 0.5 m apart, and turns its corners on the spot; one with a turning
+    radius takes a curve that gives up some of the lines' length
     (:func:`planner.move_curves.drivable_moves`, at most ``back_room_m[k]`` off the line it
     leaves and ``on_room_m[k]`` off the one it joins), or, if none is found, that shortest
     path, whose corners it cannot turn (a known weakness, counted by ``bench.move_corners``).
-    All turns are planned in one call and tested in another, the straight moves found in a
-    third (:meth:`planner.routing.FieldRouter.paths`): a turn depends on its own ends alone,
-    so the moves are those planned one by one.
 
     Parameters
     ----------
-    here_xy, before_xy, target_xy : ndarray, shape (k, 2)
+    here_xy, target_xy : ndarray, shape (k, 2)
         Local [m].
-    leaves_line, up : ndarray of bool, shape (k,)
-    heading : float
-        Line heading [deg].
+    here_yaw_rad, target_yaw_rad : ndarray, shape (k,)
+        Headings, from local x [rad].
     router : FieldRouter
     vehicle : Vehicle
-    back_room_m, on_room_m : ndarray, shape (k,), optional
-        The most each move may shorten the line it leaves and the line it joins [m]
-        (default: nothing).
+    back_room_m, on_room_m : ndarray, shape (k,)
+        The most each move may shorten the line it leaves and the line it joins [m].
 
     Returns
     -------
@@ -335,29 +336,14 @@ def moves_between_cells(
         joins starts [m].
     """
     count = len(here_xy)
-    # Lines run along the heading: +v is (sin h, cos h) in local x, y.
-    theta = math.radians(heading)
-    along = math.atan2(math.cos(theta), math.sin(theta))
-    turning = [
-        k for k in range(count) if leaves_line[k] and np.hypot(*(here_xy[k] - before_xy[k])) > 1e-9
-    ]
+    ends = TurnEnds(
+        here_xy[:, 0], here_xy[:, 1], here_yaw_rad,
+        target_xy[:, 0], target_xy[:, 1], target_yaw_rad,
+    )  # fmt: skip
     moves: list[FloatArray | None] = [None] * count
-    if turning:
-        ends = TurnEnds(
-            here_xy[turning, 0],
-            here_xy[turning, 1],
-            np.array(
-                [
-                    math.atan2(here_xy[k, 1] - before_xy[k, 1], here_xy[k, 0] - before_xy[k, 0])
-                    for k in turning
-                ]
-            ),
-            target_xy[turning, 0],
-            target_xy[turning, 1],
-            np.array([along if up[k] else along + math.pi for k in turning]),
-        )
+    if count:
         curves = vehicle_turns(ends, vehicle)
-        tried = [(k, curves.curve(t)) for t, k in enumerate(turning)]
+        tried = [(k, curves.curve(k)) for k in range(count)]
         tried = [(k, curve) for k, curve in tried if len(curve) >= 2]
         inside = router.inside_paths([curve for _, curve in tried]).tolist()
         for (k, curve), ok in zip(tried, inside, strict=True):
@@ -365,38 +351,24 @@ def moves_between_cells(
                 moves[k] = curve
     pulled_back, pushed_on = np.zeros(count), np.zeros(count)
     routes: dict[int, FloatArray] = {}
-    curving = [k for k in turning if moves[k] is None]
-    if vehicle.min_turn_radius_m > 0.0 and curving:
-        which = np.array(curving, dtype=np.int64)
-        ends = TurnEnds(
-            here_xy[which, 0],
-            here_xy[which, 1],
-            np.arctan2(
-                here_xy[which, 1] - before_xy[which, 1], here_xy[which, 0] - before_xy[which, 0]
-            ),
-            target_xy[which, 0],
-            target_xy[which, 1],
-            np.where(up[which], along, along + math.pi),
-        )
-        no_room = np.zeros(count)
-        driven = drivable_moves(
-            ends,
-            back_room_m=(no_room if back_room_m is None else back_room_m)[which],
-            on_room_m=(no_room if on_room_m is None else on_room_m)[which],
+    curving = np.array([k for k in range(count) if moves[k] is None], dtype=np.int64)
+    if vehicle.min_turn_radius_m > 0.0 and len(curving):
+        found = drivable_moves(
+            ends.take(curving),
+            back_room_m=back_room_m[curving],
+            on_room_m=on_room_m[curving],
             router=router,
             vehicle=vehicle,
         )
-        for j, k in enumerate(curving):
-            moves[k] = driven.curves[j]
-            route = driven.routes[j]
+        for j, k in enumerate(curving.tolist()):
+            moves[k] = found.curves[j]
+            route = found.routes[j]
             if route is not None:
                 routes[k] = route
-        pulled_back[which] = driven.pulled_back_m
-        pushed_on[which] = driven.pushed_on_m
+        pulled_back[curving] = found.pulled_back_m
+        pushed_on[curving] = found.pushed_on_m
     routed = [k for k in range(count) if moves[k] is None and k not in routes]
     for k, path in zip(routed, router.paths(here_xy[routed], target_xy[routed]), strict=True):
         routes[k] = path
-    for k in range(count):
-        if moves[k] is None:
-            moves[k] = densify(routes[k], STEP_M)
-    return [move for move in moves if move is not None], pulled_back, pushed_on
+    driven = [densify(routes[k], STEP_M) if move is None else move for k, move in enumerate(moves)]
+    return driven, pulled_back, pushed_on

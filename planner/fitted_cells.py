@@ -214,39 +214,65 @@ def choose_driven(
     slack_m2: float,
     drive: Callable[[FittedCells], FittedCells],
 ) -> tuple[FittedCells, float]:
-    """Apply R5 (:func:`choose_fitted`) to fitted headings as driven, planning few of them.
+    """Apply R5 (:func:`choose_fitted`) to fitted headings as driven, driving few of them.
 
     Driving a heading (``drive``: its moves between cells planned, :func:`drive_candidate`)
-    only lowers its coverage, so the choice is driven, then every heading that could still
-    cover more than the slack beyond it, and the rule applied again, until the choice is
-    driven and no heading not driven could beat it by the slack. Most fields stop at the
-    first: the moves cost the choice less than the slack.
+    only lowers its coverage. So the rule is applied with the headings not driven at their
+    fitted figures, an upper bound of their coverage; the choice is driven, and so is every
+    heading that covers more than the best driven one, until the choice is driven and the
+    best coverage is a driven heading's. The best coverage is then exact, and so is which
+    headings are within the slack of it; a heading not driven that the rule does not pick
+    is compared on its fitted length (driving changes a length by its moves' curves).
+
+    Parameters
+    ----------
+    candidates : list of FittedCells
+        Fitted headings, driven or not (:attr:`FittedCells.driven`).
+    objective : {"shortest_path", "fewest_lines"}
+    slack_m2 : float
+        R5's slack [m²].
+    drive : callable
+        Plans a fitted heading's moves between cells and measures it again.
 
     Returns
     -------
     chosen : FittedCells
         Driven.
     given_up_m2 : float
-        Area it covers less than the best heading [m²], driven or (covering no more than
-        the slack beyond the choice) not.
+        Area it covers less than the best heading [m²].
+
+    Examples
+    --------
+    Driven, A covers 99.0 and B 99.5: C (98.7, much shorter) is within the slack of B.
+
+    >>> from dataclasses import replace
+    >>> def fitted(covered_m2, length_m):
+    ...     return FittedCells(None, {}, covered_m2, length_m, 3, 0.0)  # type: ignore[arg-type]
+    >>> after = {100.0: (99.0, 50.0), 99.6: (99.5, 40.0), 98.8: (98.7, 10.0)}
+    >>> def drive(c):  # a stand-in: any value but None marks a heading driven
+    ...     covered_m2, length_m = after[c.covered_m2]
+    ...     return replace(c, covered_m2=covered_m2, length_m=length_m, driven=True)
+    >>> chosen, given_up = choose_driven(
+    ...     [fitted(100.0, 50.0), fitted(99.6, 40.0), fitted(98.8, 10.0)],
+    ...     "shortest_path", slack_m2=1.0, drive=drive)
+    >>> chosen.covered_m2, round(given_up, 6)
+    (98.7, 0.8)
     """
     pool = list(candidates)
-    is_driven = [False] * len(pool)
     while True:
         chosen, given_up_m2 = choose_fitted(pool, objective, slack_m2=slack_m2)
         at = next(i for i, c in enumerate(pool) if c is chosen)
-        if not is_driven[at]:
-            pool[at], is_driven[at] = drive(chosen), True
+        if chosen.driven is None:
+            pool[at] = drive(chosen)
             continue
-        threats = [
-            i
-            for i, c in enumerate(pool)
-            if not is_driven[i] and c.covered_m2 > chosen.covered_m2 + slack_m2
+        best_driven_m2 = max(c.covered_m2 for c in pool if c.driven is not None)
+        above = [
+            i for i, c in enumerate(pool) if c.driven is None and c.covered_m2 > best_driven_m2
         ]
-        if not threats:
+        if not above:
             return chosen, given_up_m2
-        for i in threats:
-            pool[i], is_driven[i] = drive(pool[i]), True
+        for i in above:
+            pool[i] = drive(pool[i])
 
 
 def cells_covered_m2(plan: CellPlan, fitted: list[FittedLines], width_m: float) -> float:
@@ -401,7 +427,7 @@ def choose_cells(
     must_fit: Sequence[int] = (),
     probe: Probe | None = None,
     drive: Callable[[FittedCells], FittedCells] | None = None,
-    near: Callable[[float, Sequence[float]], list[CellPlan]] | None = None,
+    near: Callable[[Sequence[float]], list[CellPlan]] | None = None,
 ) -> tuple[FittedCells, float]:
     """R5 on fitted lines, fitting as few headings as it can.
 
@@ -428,8 +454,8 @@ def choose_cells(
     ``drive``, given (a vehicle with a turning radius), plans a fitted heading's moves between
     cells, which shorten its lines: the rule is then held on headings as driven
     (:func:`choose_driven`). If the moves cost the choice more than the slack, its
-    neighbours :data:`MOVE_PROBE_OFFSETS_DEG` away (``near(heading_deg, neighbours_deg)``
-    plans them cheaply) are fitted and driven too: what the moves cost jumps from one
+    neighbours :data:`MOVE_PROBE_OFFSETS_DEG` away (``near(headings_deg)`` plans them
+    cheaply) are fitted and driven too: what the moves cost jumps from one
     heading to the next, where a cell's last line comes to end in another corner.
 
     Returns
@@ -493,7 +519,7 @@ def choose_cells(
     before = next((c for c in candidates if c.plan is chosen.plan), chosen)
     if near is not None and before.covered_m2 - chosen.covered_m2 > slack_m2:
         heading = chosen.plan.heading_deg
-        around = near(heading, [heading + offset for offset in MOVE_PROBE_OFFSETS_DEG])
+        around = near([heading + offset for offset in MOVE_PROBE_OFFSETS_DEG])
         candidates += [fit(plan) for plan in around]
         chosen, given_up_m2 = choose_driven(
             candidates, objective, slack_m2=slack_m2, drive=drive_once

@@ -344,10 +344,9 @@ def plan_general(
                 finish_xy=after_lines,
             )
 
-        def neighbours(heading_deg: float, neighbours_deg: Sequence[float]) -> list[CellPlan]:
+        def neighbours(headings_deg: Sequence[float]) -> list[CellPlan]:
             return [
-                order_cover(cover_heading(prepared, h % 180.0, d, edge), None)
-                for h in neighbours_deg
+                order_cover(cover_heading(prepared, h % 180.0, d, edge), None) for h in headings_deg
             ]
 
         drives = machine.min_turn_radius_m > 0.0

@@ -37,7 +37,7 @@ PULL_STEPS_R = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 16.0 / 3.0, 20.0 / 3.0, 25.0 
 REFINE_STEPS = 4
 #: How far the poses of a chain sit off the shortest path's corners, in turning radii.
 CORNER_OFFSETS_R = (0.5, 1.0, 1.5)
-#: The pairs of pull-backs tried in each batch, by index (most moves need one of the first).
+#: The pairs of pulls tried in each batch, by index (most moves need one of the first).
 _PAIR_BATCHES = (0, 8, 24, 56, len(PULL_STEPS_R) ** 2)
 #: Curves are screened on this many points at either end first (where most leave) ...
 _END_POINTS = 6
@@ -72,7 +72,7 @@ def pull_pairs_m(radius_m: float) -> FloatArray:
     """Every pair (pull back, push on) [m] a move may cost its lines, cheapest first.
 
     Sorted by the total, then by the pull-back: the line lengths given up, and among equal
-    totals the one that keeps more of the line driven last.
+    totals the one that keeps more of the line the move leaves.
     """
     steps = np.asarray(PULL_STEPS_R) * radius_m
     back, on = np.meshgrid(steps, steps, indexing="ij")
@@ -91,10 +91,11 @@ def drivable_moves(
 ) -> DrivenMoves:
     """Find a curve the vehicle drives inside the field for each move between cells.
 
-    A move is the vehicle's own turn between its pulled-back ends, or a chain of turns
-    through poses off the corners of the shortest path between its ends, whichever costs
-    the lines less: the first pair of :func:`pull_pairs_m`, within the room its lines
-    leave, whose curve stays inside the field.
+    A move is the vehicle's own turn between its pulled-back ends: the first pair of
+    :func:`pull_pairs_m`, within the room its lines leave, whose curve stays inside the
+    field. A move the first :data:`_PAIR_BATCHES` batch does not serve may instead be a
+    chain of turns through poses off the corners of the shortest path between its ends,
+    whichever costs the lines less. The pulls found are then refined (:func:`_refine`).
 
     Parameters
     ----------
@@ -114,18 +115,18 @@ def drivable_moves(
     """
     count = len(ends)
     pairs = pull_pairs_m(turning_radius_m(vehicle))
-    fits = (pairs[None, :, 0] <= back_room_m[:, None] + 1e-9) & (
+    within_room = (pairs[None, :, 0] <= back_room_m[:, None] + 1e-9) & (
         pairs[None, :, 1] <= on_room_m[:, None] + 1e-9
     )
     curves: list[FloatArray | None] = [None] * count
-    used = np.full(count, len(pairs), dtype=np.int64)  # the pair each found curve costs
+    pair_at = np.full(count, len(pairs), dtype=np.int64)  # the pair each found curve costs
     routes: list[FloatArray | None] = [None] * count
     through: list[Chain | None] = [None] * count  # the chain a curve runs through, if any
     for first, stop in zip(_PAIR_BATCHES[:-1], _PAIR_BATCHES[1:], strict=True):
         if first == _PAIR_BATCHES[1]:
             # The moves the cheapest pulls do not serve: their shortest paths, and chains
             # through them, which then bound the pulls the turn is tried at.
-            todo = np.flatnonzero(used == len(pairs))
+            todo = np.flatnonzero(pair_at == len(pairs))
             paths = router.paths(
                 np.stack([ends.x0[todo], ends.y0[todo]], axis=1),
                 np.stack([ends.x1[todo], ends.y1[todo]], axis=1),
@@ -133,14 +134,16 @@ def drivable_moves(
             for k, path in zip(todo.tolist(), paths, strict=True):
                 routes[k] = path
             chained, cost, chains = _chained(
-                ends.take(todo), fits[todo], pairs, paths, router, vehicle
+                ends.take(todo), within_room[todo], pairs, paths, router, vehicle
             )
             for j, k in enumerate(todo.tolist()):
-                curves[k], used[k], through[k] = chained[j], cost[j], chains[j]
-        todo = np.flatnonzero(used > first)
+                curves[k], pair_at[k], through[k] = chained[j], cost[j], chains[j]
+        todo = np.flatnonzero(pair_at > first)
         if len(todo) == 0:
             break
-        cheaper = fits[todo, first:stop] & (np.arange(first, stop)[None, :] < used[todo, None])
+        cheaper = within_room[todo, first:stop] & (
+            np.arange(first, stop)[None, :] < pair_at[todo, None]
+        )
         move, pair = np.nonzero(cheaper)
         move, pair = todo[move], pair + first  # move-major, each move's pairs in order
         if len(move) == 0:
@@ -148,13 +151,12 @@ def drivable_moves(
         turns = vehicle_turns(_pulled_ends(ends, move, pairs[pair]), vehicle)
         for t in _first_inside(move, turns, router):
             k = int(move[t])
-            curves[k] = turns.curve(t).copy()
-            used[k] = pair[t]
-    found = used < len(pairs)
-    at = np.minimum(used, len(pairs) - 1)
-    pulls = np.where(found[:, None], pairs[at], 0.0)
-    _refine(ends, curves, pulls, through, router, vehicle)
-    return DrivenMoves(curves, pulls[:, 0], pulls[:, 1], routes)
+            curves[k], pair_at[k] = turns.curve(t).copy(), pair[t]
+            through[k] = None  # the turn costs less than the chain found
+    found = pair_at < len(pairs)
+    pulls_m = np.where(found[:, None], pairs[np.minimum(pair_at, len(pairs) - 1)], 0.0)
+    curves, pulls_m = _refine(ends, curves, pulls_m, through, router, vehicle)
+    return DrivenMoves(curves, pulls_m[:, 0], pulls_m[:, 1], routes)
 
 
 def _refine(
@@ -164,28 +166,31 @@ def _refine(
     through: list[Chain | None],
     router: FieldRouter,
     vehicle: Vehicle,
-) -> None:
-    """Pull each found move's lines back less, where a curve still fits: in place.
+) -> tuple[list[FloatArray | None], FloatArray]:
+    """Pull each found move's lines back less, where a curve still fits.
 
-    The pulls were found on the coarse steps of :data:`PULL_STEPS_R`; each of the two is
-    tried again at :data:`REFINE_STEPS` - 1 points between the step below and itself, the
-    pull-back first, least first, keeping the other.
+    The pulls (``pulls_m``, shape (k, 2): back, on [m]) were found on the coarse steps of
+    :data:`PULL_STEPS_R`; each of the two is tried again at :data:`REFINE_STEPS` - 1 points
+    between the step below and itself, least first, the pull-back first and then the
+    push-on with the pull-back kept. Returns the curves and pulls, refined.
     """
-    steps = np.asarray(PULL_STEPS_R) * turning_radius_m(vehicle)
+    curves, pulls_m = list(curves), pulls_m.copy()
+    steps_m = np.asarray(PULL_STEPS_R) * turning_radius_m(vehicle)
+    share = np.arange(1, REFINE_STEPS) / REFINE_STEPS
     for side in (0, 1):
         found = [k for k, curve in enumerate(curves) if curve is not None and pulls_m[k, side] > 0]
         if not found:
-            return
-        now = pulls_m[found, side]
-        below = steps[np.maximum(np.searchsorted(steps, now - 1e-9) - 1, 0)]
-        share = np.arange(1, REFINE_STEPS) / REFINE_STEPS
+            continue
+        now_m = pulls_m[found, side]
+        below_m = steps_m[np.maximum(np.searchsorted(steps_m, now_m - 1e-9) - 1, 0)]
         move = np.repeat(np.array(found, dtype=np.int64), len(share))
-        tried = pulls_m[move].copy()
-        tried[:, side] = (below[:, None] + (now - below)[:, None] * share[None, :]).ravel()
-        for t, curve in _try_pairs(ends, move, tried, through, router, vehicle).items():
+        tried_m = pulls_m[move].copy()
+        tried_m[:, side] = (below_m[:, None] + (now_m - below_m)[:, None] * share).ravel()
+        for t, curve in _try_pairs(ends, move, tried_m, through, router, vehicle).items():
             k = int(move[t])
             curves[k] = curve
-            pulls_m[k] = tried[t]
+            pulls_m[k] = tried_m[t]
+    return curves, pulls_m
 
 
 def _try_pairs(
@@ -211,10 +216,10 @@ def _try_pairs(
             out[int(direct[t])] = turns.curve(t).copy()
     legs = np.flatnonzero(chained)
     if len(legs):
-        chains = [through[k] for k in move[legs].tolist()]
+        chains = [chain for k in move[legs].tolist() if (chain := through[k]) is not None]
         pulled = _pulled_ends(ends, move[legs], pulls_m[legs])
-        a = np.array([chain[0][0] for chain in chains if chain is not None])
-        b = np.array([chain[0][-1] for chain in chains if chain is not None])
+        a = np.array([chain[0][0] for chain in chains])  # each chain's first pose
+        b = np.array([chain[0][-1] for chain in chains])  # and its last
         into = vehicle_turns(
             TurnEnds(pulled.x0, pulled.y0, pulled.yaw0, a[:, 0], a[:, 1], a[:, 2]), vehicle
         )
@@ -225,10 +230,9 @@ def _try_pairs(
         done: set[int] = set()
         for j in np.flatnonzero(passing).tolist():
             k = int(move[legs[j]])
-            chain = chains[j]
-            if k in done or chain is None:
+            if k in done:
                 continue
-            curve = np.vstack([into.curve(j), chain[1][1:], out_of.curve(j)[1:]])
+            curve = np.vstack([into.curve(j), chains[j][1][1:], out_of.curve(j)[1:]])
             if router.inside_path(curve):
                 out[int(legs[j])] = curve
                 done.add(k)
@@ -237,7 +241,7 @@ def _try_pairs(
 
 def _chained(
     ends: TurnEnds,
-    fits: npt.NDArray[np.bool_],
+    within_room: npt.NDArray[np.bool_],
     pairs: FloatArray,
     routes: list[FloatArray],
     router: FieldRouter,
@@ -245,11 +249,12 @@ def _chained(
 ) -> tuple[list[FloatArray | None], IntArray, list[Chain | None]]:
     """Find each move's cheapest chain through poses beside its shortest path's corners.
 
+    ``within_room[k, p]``: whether move ``k``'s lines have room for pair ``p`` of ``pairs``.
     Returns the curves (None where none is found), the index in ``pairs`` of the pull each
-    costs (``len(pairs)`` where none is found) and the chains they run through. Each offset of
-    :data:`CORNER_OFFSETS_R` is tried in turn on the moves still without a chain. A chain's
-    first leg depends only on the pull-back and its last only on the push-on: each is
-    planned once per step of :data:`PULL_STEPS_R`.
+    costs (``len(pairs)`` where none is found) and the chains they run through. Each offset
+    of :data:`CORNER_OFFSETS_R` is tried in turn on the moves still without a curve. A
+    chain's first leg depends only on the pull-back and its last only on the push-on: each
+    is planned once per step of :data:`PULL_STEPS_R`.
     """
     count = len(ends)
     radius = turning_radius_m(vehicle)
@@ -285,7 +290,7 @@ def _chained(
         into_ok = _screened_inside(into, router).reshape(n, m)
         out_ok = _screened_inside(out_of, router).reshape(n, m)
         # Each move's pairs that its room allows and both legs pass, cheapest first.
-        passing = fits[move] & into_ok[:, pair_steps[:, 0]] & out_ok[:, pair_steps[:, 1]]
+        passing = within_room[move] & into_ok[:, pair_steps[:, 0]] & out_ok[:, pair_steps[:, 1]]
         for j, p in zip(*np.nonzero(passing), strict=True):
             k = int(move[j])
             if curves[k] is not None:

@@ -6,12 +6,13 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import event, given, settings
 from hypothesis import strategies as st
 from shapely import Polygon, box
 
 from planner import PRESETS, plan_coverage
 from planner.move_curves import DrivenMoves, drivable_moves, pull_pairs_m
+from planner.projection import field_frame
 from planner.routing import FieldRouter
 from planner.turns import TurnEnds, vehicle_turns
 from tests.conftest import field_from_local
@@ -86,7 +87,7 @@ def test_a_u_turn_at_the_edge_pulls_both_lines_back_just_enough() -> None:
     pairs = pull_pairs_m(RADIUS_M)
     cheaper = pairs[pairs.sum(axis=1) < total - 1e-9]
     tried = TurnEnds(
-        10.0 - cheaper[:, 0] * 0.0,
+        np.full(len(cheaper), 10.0),
         39.99 - cheaper[:, 0],
         np.full(len(cheaper), UP),
         np.full(len(cheaper), 30.0),
@@ -95,6 +96,16 @@ def test_a_u_turn_at_the_edge_pulls_both_lines_back_just_enough() -> None:
     )
     turns = vehicle_turns(tried, SMALL)
     assert not router.inside_paths([turns.curve(t) for t in range(len(turns))]).any()
+
+
+def test_a_push_on_alone_is_refined_below_its_coarse_step() -> None:
+    """Only the line joined needs shortening: its push-on is refined like a pull-back."""
+    area = box(0.0, 0.0, 60.0, 40.0)
+    moves, router, ends = one_move(area, (10.0, 20.0, UP), (30.0, 39.0, DOWN))
+    assert_drivable(moves, router, ends)
+    assert moves.pulled_back_m[0] == 0.0
+    steps_m = np.unique(pull_pairs_m(RADIUS_M))
+    assert 0.0 < moves.pushed_on_m[0] and moves.pushed_on_m[0] not in steps_m
 
 
 def test_no_room_on_the_lines_gives_no_curve() -> None:
@@ -109,6 +120,13 @@ def test_a_move_round_an_inner_corner_is_a_chain_off_the_corner() -> None:
     area = Polygon([(0, 0), (80, 0), (80, 30), (30, 30), (30, 80), (0, 80)])
     moves, router, ends = one_move(area, (70.0, 29.99, UP), (10.0, 79.99, DOWN))
     assert_drivable(moves, router, ends)
+    # Not the vehicle's own turn between the ends it found: that cuts the corner.
+    back, on = moves.pulled_back_m[0], moves.pushed_on_m[0]
+    own = TurnEnds(
+        np.array([70.0]), np.array([29.99 - back]), np.array([UP]),
+        np.array([10.0]), np.array([79.99 + on * math.sin(DOWN)]), np.array([DOWN]),
+    )  # fmt: skip
+    assert not router.inside_path(vehicle_turns(own, SMALL).curve(0))
 
 
 @settings(max_examples=40, deadline=None)
@@ -129,6 +147,7 @@ def test_every_curve_found_is_drivable_inside(
     here = (a * width, height - edge if up_first else edge, UP if up_first else DOWN)
     there = (b * width, edge if up_second else height - edge, UP if up_second else DOWN)
     moves, router, ends = one_move(area, here, there, room_m=(height - 1.0) / 2.0)
+    event(f"curve found: {moves.curves[0] is not None}")
     if moves.curves[0] is not None:
         assert_drivable(moves, router, ends)
         assert moves.pulled_back_m[0] <= (height - 1.0) / 2.0 + 1e-9
@@ -149,3 +168,16 @@ def test_a_comb_field_is_driven_within_the_radius_between_cells_too(heading_deg:
     assert any(not same_cell for _, same_cell in turns)  # moves between cells are checked
     for turn, _ in turns:
         assert (turn_curvatures(turn) <= KAPPA_MAX).all()
+    # Each move leaves its line and joins the next where they end and start, heading on.
+    frame = field_frame(plan.field_lonlat)
+    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
+    kinds = [s.kind for s in plan.segments]
+    for k in range(1, len(kinds) - 1):
+        if kinds[k] == "turn" and kinds[k - 1] == "line" and kinds[k + 1] == "line":
+            before, turn, after = local[k - 1], local[k], local[k + 1]
+            assert np.allclose(turn[0], before[-1], atol=1e-3)
+            assert np.allclose(turn[-1], after[0], atol=1e-3)
+            back = (before[-1] - before[0]) / np.hypot(*(before[-1] - before[0]))
+            on = (after[-1] - after[0]) / np.hypot(*(after[-1] - after[0]))
+            seam = np.vstack([turn[:1] - 0.5 * back, turn, turn[-1:] + 0.5 * on])
+            assert (turn_curvatures(seam) <= KAPPA_MAX).all()
