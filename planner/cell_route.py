@@ -1,8 +1,9 @@
 """The winning heading driven: each cell's lines fitted for the vehicle, turns and moves.
 
 Line ends are pulled back until the vehicle's turns fit (:func:`planner.line_ends.fit_lines`)
-and every move between cells is the vehicle's own turn if it stays in, else routed inside
-the field (:mod:`planner.routing`).
+and every move between cells is the vehicle's own turn if it stays in; else, for a vehicle
+with a turning radius, a curve for which the lines it joins give up some length
+(:mod:`planner.move_curves`), and otherwise routed inside the field (:mod:`planner.routing`).
 """
 
 from __future__ import annotations
