@@ -3,7 +3,9 @@
 Line ends are pulled back until the vehicle's turns fit (:func:`planner.line_ends.fit_lines`)
 and every move between cells is the vehicle's own turn if it stays in; else, for a vehicle
 with a turning radius, a curve for which the lines it joins give up some length
-(:mod:`planner.move_curves`), and otherwise routed inside the field (:mod:`planner.routing`).
+(:mod:`planner.move_curves`), or, failing that, for which up to three lines at either end
+of the move are dropped (:class:`_LineDrops`); and otherwise routed inside the field
+(:mod:`planner.routing`), with corners.
 """
 
 from __future__ import annotations
@@ -148,63 +150,268 @@ def drive_cells(
     Each leaves the last line's end of one cell (driven from the line's start) for the first
     line's start of the next (:func:`moves_between_cells`), and may shorten each of the two
     lines by less than half, keeping :data:`_KEPT_LINE_M` of it (a cell of one line gives up
-    length at both ends).
+    length at both ends). Where a vehicle with a turning radius finds no curve for a move,
+    a line at either end of it may go instead (:class:`_LineDrops`).
     """
     driven = [fit for fit in fitted if len(fit.u)]
     if len(driven) < 2:
         return DrivenCells(list(fitted), [])
-    heading = plan.heading_deg
-    first_u = np.array([fit.u[0] for fit in driven[1:]])
-    first_v = np.array([fit.v_start[0] for fit in driven[1:]])
-    last_u = np.array([fit.u[-1] for fit in driven[:-1]])
-    x0, y0 = from_sweep(first_u, first_v, heading)
-    x1, y1 = from_sweep(last_u, np.array([fit.v_end[-1] for fit in driven[:-1]]), heading)
-    first_m = np.array([abs(fit.v_end[0] - fit.v_start[0]) for fit in driven[1:]])
-    last_m = np.array([abs(fit.v_end[-1] - fit.v_start[-1]) for fit in driven[:-1]])
-    xb, yb = from_sweep(last_u, np.array([fit.v_start[-1] for fit in driven[:-1]]), heading)
+    drops = _LineDrops(plan.heading_deg, driven, router, vehicle)
+    if vehicle.min_turn_radius_m > 0.0:
+        drops.drop_for_curves()
+    kept, moves = drops.result()
+    cells = iter(kept)
+    return DrivenCells([next(cells) if len(fit.u) else fit for fit in fitted], moves)
+
+
+#: A move between two cells: the cell it leaves and the one it joins (indices of the cells
+#: with lines), and how many lines the first has lost at its end and the second at its start.
+_MoveKey = tuple[int, int, int, int]
+#: A planned move: its points, the pull-back and push-on it costs, whether it is curved.
+_PlannedMove = tuple[FloatArray, float, float, bool]
+
+
+class _LineDrops:
+    """A plan's cells with some of their end lines dropped, and the moves between them.
+
+    A move for which a vehicle with a turning radius finds no curve (the shortest path,
+    with corners) mostly leaves or joins a line too short to give up the length a curve
+    needs: a sliver of a cell, most often a cell of one line. :meth:`drop_for_curves`
+    drops such lines, and cells, where the moves then planned are curves, trading their
+    coverage for a path the vehicle can drive (R1). Moves are planned in batches and kept
+    by what they depend on (:data:`_MoveKey`).
+    """
+
+    #: The most lines dropped for one move, before it and after it together.
+    MOST_DROPPED = 3
+
+    def __init__(
+        self, heading_deg: float, cells: list[FittedLines], router: FieldRouter, vehicle: Vehicle
+    ) -> None:
+        self.heading_deg = heading_deg
+        self.cells = cells
+        self.line_m = [np.abs(fit.v_end - fit.v_start) for fit in cells]
+        self.router = router
+        self.vehicle = vehicle
+        self.first_dropped = [0] * len(cells)
+        self.last_dropped = [0] * len(cells)
+        self.planned: dict[_MoveKey, _PlannedMove] = {}
+        self._plan(self._keys(self.first_dropped, self.last_dropped))
+
+    def _alive(self, first: list[int], last: list[int]) -> list[int]:
+        return [c for c, lines in enumerate(self.line_m) if first[c] + last[c] < len(lines)]
+
+    def _keys(self, first: list[int], last: list[int]) -> list[_MoveKey]:
+        alive = self._alive(first, last)
+        return [(i, j, last[i], first[j]) for i, j in zip(alive[:-1], alive[1:], strict=True)]
+
+    def _plan(self, keys: list[_MoveKey]) -> None:
+        todo = list(dict.fromkeys(key for key in keys if key not in self.planned))
+        if not todo:
+            return
+        moves, back_m, on_m, curved = _moves_from_to(
+            self.heading_deg,
+            [_without_lines(self.cells[i], 0, last) for i, _, last, _ in todo],
+            [_without_lines(self.cells[j], first, 0) for _, j, _, first in todo],
+            self.router,
+            self.vehicle,
+        )
+        for t, key in enumerate(todo):
+            self.planned[key] = (moves[t], float(back_m[t]), float(on_m[t]), bool(curved[t]))
+
+    def _dropping(self, move: _MoveKey, back: int, on: int) -> tuple[list[int], list[int], float]:
+        """Return the lines dropped with ``back`` more before ``move`` and ``on`` more after.
+
+        Lines go from the end of the cell the move leaves, then, once it has none, from the
+        end of the cell before it; and from the start of the cell it joins, then the next.
+        Returns the lines dropped at each cell's start and end, and the length added [m]
+        (infinite if the plan has too few lines).
+        """
+        first, last = list(self.first_dropped), list(self.last_dropped)
+        length_m = 0.0
+        for count, cell, step in ((back, move[0], -1), (on, move[1], 1)):
+            for _ in range(count):
+                while 0 <= cell < len(self.cells) and first[cell] + last[cell] >= len(
+                    self.line_m[cell]
+                ):
+                    cell += step
+                if not 0 <= cell < len(self.cells):
+                    return first, last, math.inf
+                lines = self.line_m[cell]
+                if step < 0:
+                    length_m += float(lines[len(lines) - 1 - last[cell]])
+                    last[cell] += 1
+                else:
+                    length_m += float(lines[first[cell]])
+                    first[cell] += 1
+        return first, last, length_m
+
+    def drop_for_curves(self) -> None:
+        """Drop lines where that turns a move with corners into curves.
+
+        One line, then two, up to :data:`MOST_DROPPED`: every move with corners tries the
+        splits of that many lines before and after it, cheapest first (least length
+        dropped), and takes the first whose moves are all curves, unless a move taken
+        before it in the round changed one of the cells its moves join. A cell whose every
+        line goes is dropped, and its neighbours are joined by a move.
+        """
+        for count in range(1, self.MOST_DROPPED + 1):
+            now = self._keys(self.first_dropped, self.last_dropped)
+            cornered = [key for key in now if not self.planned[key][3]]
+            if not cornered:
+                return
+            current = set(now)
+            options: list[list[tuple[float, list[int], list[int], set[int], list[_MoveKey]]]] = []
+            for move in cornered:
+                mine = []
+                for back in range(count + 1):
+                    first, last, length_m = self._dropping(move, back, count - back)
+                    if math.isinf(length_m):
+                        continue
+                    keys = [key for key in self._keys(first, last) if key not in current]
+                    changed = {
+                        c
+                        for c in range(len(self.cells))
+                        if (first[c], last[c]) != (self.first_dropped[c], self.last_dropped[c])
+                    }
+                    touched = changed | {key[0] for key in keys} | {key[1] for key in keys}
+                    mine.append((length_m, first, last, touched, keys))
+                options.append(sorted(mine, key=lambda option: option[0]))
+            # The cheapest split of every move first, in one batch; the next cheapest of the
+            # moves it leaves with corners; and so on: most moves take their first.
+            taken: set[int] = set()
+            open_moves = list(range(len(options)))
+            for rank in range(count + 1):
+                open_moves = [m for m in open_moves if rank < len(options[m])]
+                self._plan([key for m in open_moves for key in options[m][rank][4]])
+                still = []
+                for m in open_moves:
+                    _, first, last, touched, keys = options[m][rank]
+                    if not all(self.planned[key][3] for key in keys):
+                        still.append(m)
+                    elif not touched & taken:
+                        taken |= touched
+                        for c in touched:
+                            self.first_dropped[c], self.last_dropped[c] = first[c], last[c]
+                open_moves = still
+
+    def result(self) -> tuple[list[FittedLines], list[FloatArray]]:
+        """Return the cells, less the lines dropped and shortened by the moves, and the moves.
+
+        A cell whose every line is dropped has none left.
+        """
+        first, last = self.first_dropped, self.last_dropped
+        cells = [_without_lines(fit, first[c], last[c]) for c, fit in enumerate(self.cells)]
+        alive = self._alive(first, last)
+        moves = [self.planned[key] for key in self._keys(first, last)]
+        shortened = _shortened(
+            [cells[c] for c in alive],
+            np.array([move[1] for move in moves]),
+            np.array([move[2] for move in moves]),
+        )
+        for c, fit in zip(alive, shortened, strict=True):
+            cells[c] = fit
+        return cells, [move[0] for move in moves]
+
+
+def _moves_from_to(
+    heading_deg: float,
+    leaving: list[FittedLines],
+    joining: list[FittedLines],
+    router: FieldRouter,
+    vehicle: Vehicle,
+) -> tuple[list[FloatArray], FloatArray, FloatArray, npt.NDArray[np.bool_]]:
+    """Plan the moves from each cell of ``leaving`` to each of ``joining``.
+
+    Move ``k`` leaves the end of ``leaving[k]``'s last line for the start of ``joining[k]``'s
+    first (:func:`moves_between_cells`, which gives the result).
+    """
+    first_u = np.array([fit.u[0] for fit in joining])
+    first_v = np.array([fit.v_start[0] for fit in joining])
+    last_u = np.array([fit.u[-1] for fit in leaving])
+    x0, y0 = from_sweep(first_u, first_v, heading_deg)
+    x1, y1 = from_sweep(last_u, np.array([fit.v_end[-1] for fit in leaving]), heading_deg)
+    first_m = np.array([abs(fit.v_end[0] - fit.v_start[0]) for fit in joining])
+    last_m = np.array([abs(fit.v_end[-1] - fit.v_start[-1]) for fit in leaving])
+    xb, yb = from_sweep(last_u, np.array([fit.v_start[-1] for fit in leaving]), heading_deg)
     # Lines run along the heading (+v is (sin h, cos h) in local x, y) or against it; a
     # move leaves its line in the direction from the line's start to its end.
-    theta = math.radians(heading)
+    theta = math.radians(heading_deg)
     along = math.atan2(math.cos(theta), math.sin(theta))
-    leaving = np.array([fit.v_end[-1] >= fit.v_start[-1] for fit in driven[:-1]], dtype=bool)
-    joining = np.array([fit.v_end[0] >= fit.v_start[0] for fit in driven[1:]], dtype=bool)
+    leaves_up = np.array([fit.v_end[-1] >= fit.v_start[-1] for fit in leaving], dtype=bool)
+    joins_up = np.array([fit.v_end[0] >= fit.v_start[0] for fit in joining], dtype=bool)
     here_yaw = np.where(
-        last_m > 1e-9, np.arctan2(y1 - yb, x1 - xb), np.where(leaving, along, along + math.pi)
+        last_m > 1e-9, np.arctan2(y1 - yb, x1 - xb), np.where(leaves_up, along, along + math.pi)
     )
-    moves, pulled_back, pushed_on = moves_between_cells(
+    return moves_between_cells(
         np.stack([x1, y1], axis=1),
         here_yaw,
         np.stack([x0, y0], axis=1),
-        np.where(joining, along, along + math.pi),
+        np.where(joins_up, along, along + math.pi),
         router=router,
         vehicle=vehicle,
         back_room_m=np.maximum((last_m - _KEPT_LINE_M) / 2.0, 0.0),
         on_room_m=np.maximum((first_m - _KEPT_LINE_M) / 2.0, 0.0),
     )
-    shortened = _shortened(driven, pulled_back, pushed_on)
-    return DrivenCells([shortened.get(id(fit), fit) for fit in fitted], moves)
+
+
+def _without_lines(fit: FittedLines, first: int, last: int) -> FittedLines:
+    """Return ``fit`` without its ``first`` first and ``last`` last lines, and their turns."""
+    if first == 0 and last == 0:
+        return fit
+    n = len(fit.u)
+    lines = slice(first, n - last)
+    turns = fit.turns
+    if first + last >= n:
+        nothing = np.zeros(0)
+        return replace(
+            fit,
+            u=nothing,
+            v_start=nothing,
+            v_end=nothing,
+            index=fit.index[:0],
+            turns=TurnCurves(
+                np.zeros((0, 2)), np.zeros(1, dtype=np.int64), nothing, nothing, turns.radius_m
+            ),
+        )
+    kept = slice(first, n - 1 - last)  # the turns between the lines kept
+    offsets = turns.offsets[first : n - last]
+    return replace(
+        fit,
+        u=fit.u[lines],
+        v_start=fit.v_start[lines],
+        v_end=fit.v_end[lines],
+        index=fit.index[lines],
+        turns=TurnCurves(
+            turns.xy[offsets[0] : offsets[-1]],
+            offsets - offsets[0],
+            turns.length_m[kept],
+            turns.turn_rad[kept],
+            turns.radius_m,
+        ),
+    )
 
 
 def _shortened(
     driven: list[FittedLines], pulled_back_m: FloatArray, pushed_on_m: FloatArray
-) -> dict[int, FittedLines]:
-    """Return the cells whose first or last line a move shortened, by ``id`` of their fit.
+) -> list[FittedLines]:
+    """Return ``driven`` with the first and last lines shortened by the moves' pulls.
 
     Move ``k`` leaves cell ``k`` and joins cell ``k + 1`` (of the cells with lines). New
     arrays: a fit may be cached for other plans.
     """
-    changed: dict[int, FittedLines] = {}
+    changed = list(driven)
     for k, (back, on) in enumerate(zip(pulled_back_m.tolist(), pushed_on_m.tolist(), strict=True)):
         if back > 0.0:
-            fit = changed.get(id(driven[k]), driven[k])
+            fit = changed[k]
             v_end = fit.v_end.copy()
             v_end[-1] -= back if v_end[-1] >= fit.v_start[-1] else -back
-            changed[id(driven[k])] = replace(fit, v_end=v_end)
+            changed[k] = replace(fit, v_end=v_end)
         if on > 0.0:
-            fit = changed.get(id(driven[k + 1]), driven[k + 1])
+            fit = changed[k + 1]
             v_start = fit.v_start.copy()
             v_start[0] += on if fit.v_end[0] >= v_start[0] else -on
-            changed[id(driven[k + 1])] = replace(fit, v_start=v_start)
+            changed[k + 1] = replace(fit, v_start=v_start)
     return changed
 
 
@@ -302,7 +509,7 @@ def moves_between_cells(
     vehicle: Vehicle,
     back_room_m: FloatArray,
     on_room_m: FloatArray,
-) -> tuple[list[FloatArray], FloatArray, FloatArray]:
+) -> tuple[list[FloatArray], FloatArray, FloatArray, npt.NDArray[np.bool_]]:
     """Plan the moves from line ends to other cells' first line starts.
 
     Move ``k`` leaves ``here_xy[k]``, the end of a line driven at ``here_yaw_rad[k]``, for
@@ -335,6 +542,9 @@ def moves_between_cells(
     pulled_back_m, pushed_on_m : ndarray, shape (k,)
         How much earlier the line move ``k`` leaves now ends, and how much later the line it
         joins starts [m].
+    curved : ndarray of bool, shape (k,)
+        Whether the vehicle drives move ``k`` as planned: False for a vehicle with a turning
+        radius that has no curve for it (the shortest path, with corners).
     """
     count = len(here_xy)
     ends = TurnEnds(
@@ -372,4 +582,7 @@ def moves_between_cells(
     for k, path in zip(routed, router.paths(here_xy[routed], target_xy[routed]), strict=True):
         routes[k] = path
     driven = [densify(routes[k], STEP_M) if move is None else move for k, move in enumerate(moves)]
-    return driven, pulled_back, pushed_on
+    curved = np.array([move is not None for move in moves], dtype=bool)
+    if vehicle.min_turn_radius_m <= 0.0:
+        curved[:] = True  # it turns the routes' corners on the spot
+    return driven, pulled_back, pushed_on, curved

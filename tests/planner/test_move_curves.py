@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 from shapely import Polygon, box
@@ -15,7 +16,9 @@ from planner.move_curves import DrivenMoves, drivable_moves, pull_pairs_m
 from planner.projection import field_frame
 from planner.routing import FieldRouter
 from planner.turns import TurnEnds, vehicle_turns
-from tests.conftest import field_from_local
+from planner.types import CoveragePlan
+from tests.conftest import FIELDS_DIR, field_from_local
+from tests.planner.field_files import shared_feature
 from tests.planner.plan_checks import assert_body_inside, line_to_line_turns, turn_curvatures
 
 SMALL = PRESETS["small_tractor"]
@@ -166,7 +169,27 @@ def test_a_comb_field_is_driven_within_the_radius_between_cells_too(heading_deg:
     assert_body_inside(plan)
     turns = line_to_line_turns(plan)
     assert any(not same_cell for _, same_cell in turns)  # moves between cells are checked
-    for turn, _ in turns:
+    assert_every_turn_within_the_radius(plan)
+
+
+#: Real fields whose plans had moves between cells with corners, each leaving or joining
+#: a cell of one short line, before such lines were dropped (``bench.move_corners``).
+SLIVERED = ["germany_2018_2019-53", "germany_2018_2019-49", "germany_2018_2019-6"]
+
+
+@pytest.mark.parametrize("feature_id", SLIVERED)
+def test_a_line_too_short_for_a_curve_is_dropped_not_cornered(feature_id: str) -> None:
+    """Every move between cells is a curve within the radius, and the body stays inside."""
+    feature = shared_feature(FIELDS_DIR / "germany_2018_2019.geojson", feature_id)
+    field = shapely.geometry.shape(feature["geometry"])
+    plan = plan_coverage(field, interval_m=4.0, vehicle="small_tractor")
+    assert_body_inside(plan)
+    assert_every_turn_within_the_radius(plan)
+
+
+def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
+    """Every turn between two lines is within the radius, and so are its seams with them."""
+    for turn, _ in line_to_line_turns(plan):
         assert (turn_curvatures(turn) <= KAPPA_MAX).all()
     # Each move leaves its line and joins the next where they end and start, heading on.
     frame = field_frame(plan.field_lonlat)
