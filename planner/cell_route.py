@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -26,7 +27,7 @@ from planner.move_curves import drivable_moves
 from planner.ordering import order_boustrophedon, order_snake
 from planner.route_builder import RouteBuilder, add_fitted_lines, densify
 from planner.routing import FieldRouter
-from planner.turns import STEP_M, TurnCurves, TurnEnds, vehicle_turns
+from planner.turns import STEP_M, TurnCurves, TurnEnds, turn_range, vehicle_turns
 from planner.types import Pattern, Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -133,7 +134,9 @@ class DrivenCells:
     ----------
     fitted : list of FittedLines
         Every cell of the plan's order, in driving order (sweep frame): fitted, and the
-        first and last lines shortened where a move between cells needs the room.
+        first and last lines shortened where a move between cells needs the room; with a
+        turning radius, some lines at a cell's sides dropped for a move that had no curve,
+        and a cell may have none left.
     moves : list of ndarray
         The moves between consecutive cells that have lines, local [m].
     """
@@ -151,7 +154,7 @@ def drive_cells(
     line's start of the next (:func:`moves_between_cells`), and may shorten each of the two
     lines by less than half, keeping :data:`_KEPT_LINE_M` of it (a cell of one line gives up
     length at both ends). Where a vehicle with a turning radius finds no curve for a move,
-    a line at either end of it may go instead (:class:`_LineDrops`).
+    up to three lines at its ends may go instead, whole cells too (:class:`_LineDrops`).
     """
     driven = [fit for fit in fitted if len(fit.u)]
     if len(driven) < 2:
@@ -167,12 +170,29 @@ def drive_cells(
 #: A move between two cells: the cell it leaves and the one it joins (indices of the cells
 #: with lines), and how many lines the first has lost at its end and the second at its start.
 _MoveKey = tuple[int, int, int, int]
-#: A planned move: its points, the pull-back and push-on it costs, whether it is curved.
-_PlannedMove = tuple[FloatArray, float, float, bool]
+
+
+class _PlannedMove(NamedTuple):
+    """A move planned between two cells (:func:`moves_between_cells`, one of its moves)."""
+
+    points: FloatArray
+    pulled_back_m: float
+    pushed_on_m: float
+    curved: bool
+
+
+class _Drops(NamedTuple):
+    """Lines a move with corners may drop: every cell's count at its start and its end."""
+
+    length_m: float  # of the lines it adds to those dropped
+    first_dropped: list[int]
+    last_dropped: list[int]
+    touched: set[int]  # the cells whose drops change, and the ends of the moves it adds
+    new_moves: list[_MoveKey]
 
 
 class _LineDrops:
-    """A plan's cells with some of their end lines dropped, and the moves between them.
+    """A plan's cells with some of their side lines dropped, and the moves between them.
 
     A move for which a vehicle with a turning radius finds no curve (the shortest path,
     with corners) mostly leaves or joins a line too short to give up the length a curve
@@ -182,7 +202,8 @@ class _LineDrops:
     by what they depend on (:data:`_MoveKey`).
     """
 
-    #: The most lines dropped for one move, before it and after it together.
+    #: The most lines one choice drops for a move, before it and after it together (a
+    #: cell may lose more over several moves).
     MOST_DROPPED = 3
 
     def __init__(
@@ -217,15 +238,17 @@ class _LineDrops:
             self.vehicle,
         )
         for t, key in enumerate(todo):
-            self.planned[key] = (moves[t], float(back_m[t]), float(on_m[t]), bool(curved[t]))
+            self.planned[key] = _PlannedMove(
+                moves[t], float(back_m[t]), float(on_m[t]), bool(curved[t])
+            )
 
-    def _dropping(self, move: _MoveKey, back: int, on: int) -> tuple[list[int], list[int], float]:
-        """Return the lines dropped with ``back`` more before ``move`` and ``on`` more after.
+    def _proposed(self, move: _MoveKey, back: int, on: int) -> _Drops | None:
+        """Drop ``back`` more lines before ``move`` and ``on`` more after it, if that can be.
 
         Lines go from the end of the cell the move leaves, then, once it has none, from the
         end of the cell before it; and from the start of the cell it joins, then the next.
-        Returns the lines dropped at each cell's start and end, and the length added [m]
-        (infinite if the plan has too few lines).
+        Only a line at its cell's side goes (a snake's last line may lie inside the cell:
+        dropping it would leave a gap), and a line must be left in the plan. None if not.
         """
         first, last = list(self.first_dropped), list(self.last_dropped)
         length_m = 0.0
@@ -236,15 +259,27 @@ class _LineDrops:
                 ):
                     cell += step
                 if not 0 <= cell < len(self.cells):
-                    return first, last, math.inf
-                lines = self.line_m[cell]
+                    return None
+                index = self.cells[cell].index[first[cell] : len(self.line_m[cell]) - last[cell]]
+                k = len(index) - 1 if step < 0 else 0  # the line dropped, among those left
+                if index[k] != index.min() and index[k] != index.max():
+                    return None
+                length_m += float(self.line_m[cell][first[cell] + k])
                 if step < 0:
-                    length_m += float(lines[len(lines) - 1 - last[cell]])
                     last[cell] += 1
                 else:
-                    length_m += float(lines[first[cell]])
                     first[cell] += 1
-        return first, last, length_m
+        if not self._alive(first, last):
+            return None
+        now = set(self._keys(self.first_dropped, self.last_dropped))
+        new_moves = [key for key in self._keys(first, last) if key not in now]
+        changed = {
+            c
+            for c in range(len(self.cells))
+            if (first[c], last[c]) != (self.first_dropped[c], self.last_dropped[c])
+        }
+        touched = changed | {key[0] for key in new_moves} | {key[1] for key in new_moves}
+        return _Drops(length_m, first, last, touched, new_moves)
 
     def drop_for_curves(self) -> None:
         """Drop lines where that turns a move with corners into curves.
@@ -252,48 +287,48 @@ class _LineDrops:
         One line, then two, up to :data:`MOST_DROPPED`: every move with corners tries the
         splits of that many lines before and after it, cheapest first (least length
         dropped), and takes the first whose moves are all curves, unless a move taken
-        before it in the round changed one of the cells its moves join. A cell whose every
-        line goes is dropped, and its neighbours are joined by a move.
+        before it changed one of the cells its moves join; such moves try again once the
+        others are taken. A cell whose every line goes is dropped, and its neighbours are
+        joined by a move.
         """
         for count in range(1, self.MOST_DROPPED + 1):
-            now = self._keys(self.first_dropped, self.last_dropped)
-            cornered = [key for key in now if not self.planned[key][3]]
-            if not cornered:
-                return
-            current = set(now)
-            options: list[list[tuple[float, list[int], list[int], set[int], list[_MoveKey]]]] = []
-            for move in cornered:
-                mine = []
-                for back in range(count + 1):
-                    first, last, length_m = self._dropping(move, back, count - back)
-                    if math.isinf(length_m):
-                        continue
-                    keys = [key for key in self._keys(first, last) if key not in current]
-                    changed = {
-                        c
-                        for c in range(len(self.cells))
-                        if (first[c], last[c]) != (self.first_dropped[c], self.last_dropped[c])
-                    }
-                    touched = changed | {key[0] for key in keys} | {key[1] for key in keys}
-                    mine.append((length_m, first, last, touched, keys))
-                options.append(sorted(mine, key=lambda option: option[0]))
-            # The cheapest split of every move first, in one batch; the next cheapest of the
-            # moves it leaves with corners; and so on: most moves take their first.
-            taken: set[int] = set()
-            open_moves = list(range(len(options)))
-            for rank in range(count + 1):
-                open_moves = [m for m in open_moves if rank < len(options[m])]
-                self._plan([key for m in open_moves for key in options[m][rank][4]])
-                still = []
-                for m in open_moves:
-                    _, first, last, touched, keys = options[m][rank]
-                    if not all(self.planned[key][3] for key in keys):
-                        still.append(m)
-                    elif not touched & taken:
-                        taken |= touched
-                        for c in touched:
-                            self.first_dropped[c], self.last_dropped[c] = first[c], last[c]
-                open_moves = still
+            while self._drop_round(count):
+                pass
+
+    def _drop_round(self, count: int) -> bool:
+        """One round of :meth:`drop_for_curves` at ``count`` lines; whether it dropped any."""
+        cornered = [
+            key
+            for key in self._keys(self.first_dropped, self.last_dropped)
+            if not self.planned[key].curved
+        ]
+        options: list[list[_Drops]] = []
+        for move in cornered:
+            splits = [self._proposed(move, back, count - back) for back in range(count + 1)]
+            options.append(sorted((s for s in splits if s is not None), key=lambda s: s.length_m))
+        # The cheapest split of every move first, in one batch; the next cheapest of the
+        # moves it leaves with corners; and so on: most moves take their first.
+        taken: set[int] = set()
+        open_moves = list(range(len(options)))
+        for rank in range(count + 1):
+            open_moves = [
+                m
+                for m in open_moves
+                if rank < len(options[m]) and not options[m][rank].touched & taken
+            ]
+            self._plan([key for m in open_moves for key in options[m][rank].new_moves])
+            still = []
+            for m in open_moves:
+                drops = options[m][rank]
+                if not all(self.planned[key].curved for key in drops.new_moves):
+                    still.append(m)
+                elif not drops.touched & taken:
+                    taken |= drops.touched
+                    for c in drops.touched:
+                        self.first_dropped[c] = drops.first_dropped[c]
+                        self.last_dropped[c] = drops.last_dropped[c]
+            open_moves = still
+        return bool(taken)
 
     def result(self) -> tuple[list[FittedLines], list[FloatArray]]:
         """Return the cells, less the lines dropped and shortened by the moves, and the moves.
@@ -306,12 +341,12 @@ class _LineDrops:
         moves = [self.planned[key] for key in self._keys(first, last)]
         shortened = _shortened(
             [cells[c] for c in alive],
-            np.array([move[1] for move in moves]),
-            np.array([move[2] for move in moves]),
+            np.array([move.pulled_back_m for move in moves]),
+            np.array([move.pushed_on_m for move in moves]),
         )
         for c, fit in zip(alive, shortened, strict=True):
             cells[c] = fit
-        return cells, [move[0] for move in moves]
+        return cells, [move.points for move in moves]
 
 
 def _moves_from_to(
@@ -321,7 +356,7 @@ def _moves_from_to(
     router: FieldRouter,
     vehicle: Vehicle,
 ) -> tuple[list[FloatArray], FloatArray, FloatArray, npt.NDArray[np.bool_]]:
-    """Plan the moves from each cell of ``leaving`` to each of ``joining``.
+    """Plan the moves from ``leaving[k]`` to ``joining[k]``, for every ``k``.
 
     Move ``k`` leaves the end of ``leaving[k]``'s last line for the start of ``joining[k]``'s
     first (:func:`moves_between_cells`, which gives the result).
@@ -359,36 +394,16 @@ def _without_lines(fit: FittedLines, first: int, last: int) -> FittedLines:
     """Return ``fit`` without its ``first`` first and ``last`` last lines, and their turns."""
     if first == 0 and last == 0:
         return fit
-    n = len(fit.u)
-    lines = slice(first, n - last)
-    turns = fit.turns
-    if first + last >= n:
-        nothing = np.zeros(0)
-        return replace(
-            fit,
-            u=nothing,
-            v_start=nothing,
-            v_end=nothing,
-            index=fit.index[:0],
-            turns=TurnCurves(
-                np.zeros((0, 2)), np.zeros(1, dtype=np.int64), nothing, nothing, turns.radius_m
-            ),
-        )
-    kept = slice(first, n - 1 - last)  # the turns between the lines kept
-    offsets = turns.offsets[first : n - last]
+    stop = max(len(fit.u) - last, first)
+    # The turns between the lines kept: lines first … stop - 1 have turns first … stop - 2.
+    turns = turn_range(fit.turns, 0, 0) if stop == first else turn_range(fit.turns, first, stop - 1)
     return replace(
         fit,
-        u=fit.u[lines],
-        v_start=fit.v_start[lines],
-        v_end=fit.v_end[lines],
-        index=fit.index[lines],
-        turns=TurnCurves(
-            turns.xy[offsets[0] : offsets[-1]],
-            offsets - offsets[0],
-            turns.length_m[kept],
-            turns.turn_rad[kept],
-            turns.radius_m,
-        ),
+        u=fit.u[first:stop],
+        v_start=fit.v_start[first:stop],
+        v_end=fit.v_end[first:stop],
+        index=fit.index[first:stop],
+        turns=turns,
     )
 
 
