@@ -242,15 +242,17 @@ class _LineDrops:
                 moves[t], float(back_m[t]), float(on_m[t]), bool(curved[t])
             )
 
-    def _proposed(self, move: _MoveKey, back: int, on: int) -> _Drops | None:
+    def _proposed(self, move: _MoveKey, back: int, on: int, now: set[_MoveKey]) -> _Drops | None:
         """Drop ``back`` more lines before ``move`` and ``on`` more after it, if that can be.
 
         Lines go from the end of the cell the move leaves, then, once it has none, from the
         end of the cell before it; and from the start of the cell it joins, then the next.
         Only a line at its cell's side goes (a snake's last line may lie inside the cell:
         dropping it would leave a gap), and a line must be left in the plan. None if not.
+        ``now``: the moves of the cells as they are.
         """
         first, last = list(self.first_dropped), list(self.last_dropped)
+        changed: set[int] = set()
         length_m = 0.0
         for count, cell, step in ((back, move[0], -1), (on, move[1], 1)):
             for _ in range(count):
@@ -265,19 +267,14 @@ class _LineDrops:
                 if index[k] != index.min() and index[k] != index.max():
                     return None
                 length_m += float(self.line_m[cell][first[cell] + k])
+                changed.add(cell)
                 if step < 0:
                     last[cell] += 1
                 else:
                     first[cell] += 1
         if not self._alive(first, last):
             return None
-        now = set(self._keys(self.first_dropped, self.last_dropped))
         new_moves = [key for key in self._keys(first, last) if key not in now]
-        changed = {
-            c
-            for c in range(len(self.cells))
-            if (first[c], last[c]) != (self.first_dropped[c], self.last_dropped[c])
-        }
         touched = changed | {key[0] for key in new_moves} | {key[1] for key in new_moves}
         return _Drops(length_m, first, last, touched, new_moves)
 
@@ -297,17 +294,18 @@ class _LineDrops:
 
     def _drop_round(self, count: int) -> bool:
         """One round of :meth:`drop_for_curves` at ``count`` lines; whether it dropped any."""
-        cornered = [
-            key
-            for key in self._keys(self.first_dropped, self.last_dropped)
-            if not self.planned[key].curved
-        ]
+        now = self._keys(self.first_dropped, self.last_dropped)
+        cornered = [key for key in now if not self.planned[key].curved]
+        current = set(now)
         options: list[list[_Drops]] = []
         for move in cornered:
-            splits = [self._proposed(move, back, count - back) for back in range(count + 1)]
+            splits = [
+                self._proposed(move, back, count - back, current) for back in range(count + 1)
+            ]
             options.append(sorted((s for s in splits if s is not None), key=lambda s: s.length_m))
         # The cheapest split of every move first, in one batch; the next cheapest of the
-        # moves it leaves with corners; and so on: most moves take their first.
+        # moves it leaves with corners; and so on: most moves take their first. A split
+        # that clashes with one taken this round waits for the next round.
         taken: set[int] = set()
         open_moves = list(range(len(options)))
         for rank in range(count + 1):
