@@ -10,8 +10,8 @@ joins, so that a heading that jumps where the turn meets a line counts too. A tu
 radius allows (the tolerance of ``tests/planner/plan_checks.py``). Turns within a cell are
 held to the radius by the tests; the sharp ones are moves between cells for which no curve
 was found, even with the lines shortened (:mod:`planner.move_curves`) or up to three of
-them dropped (``planner.cell_route._LineDrops``): the shortest path inside the machine area,
-with corners (:func:`planner.cell_route.moves_between_cells`).
+them dropped (``planner.cell_moves._LineDrops``): the shortest path inside the machine area,
+with corners (:func:`planner.cell_moves.moves_between_cells`).
 Not part of ``make bench``.
 """
 

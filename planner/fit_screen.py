@@ -19,7 +19,7 @@ chain's vertices between its points, and lines left after the sides' rounds stay
 is fitted with its first line driven up and with it down, and counted the way the plan will
 drive it (:mod:`planner.parity_kernels`: on one real field the two differ by 22 pp of its
 area).
-The planner fits the headings it ranks best for real (:func:`planner.fitted_cells.cover_picks`).
+The planner fits the headings it ranks best for real (:func:`planner.cover_picks.cover_picks`).
 """
 
 from __future__ import annotations

@@ -34,18 +34,12 @@ from planner.cell_plans import (
     reorder,
 )
 from planner.cell_route import CellFits, add_cells
+from planner.cover_picks import cover_picks, excluded_variants
 from planner.decomposition import sweep_rings
 from planner.edge_estimates import edge_headings
 from planner.errors import PlanTooLargeError
 from planner.fit_screen import turn_table
-from planner.fitted_cells import (
-    FittedCells,
-    choose_cells,
-    cover_picks,
-    drive_candidate,
-    excluded_variants,
-    fit_candidate,
-)
+from planner.fitted_cells import FittedCells, choose_cells, drive_candidate, fit_candidate
 from planner.footprints import UNION_GRID_M, line_footprints, lines_covered
 from planner.heading_search import score_headings
 from planner.headland_route import add_headland, first_ring_point, ring_order

@@ -146,7 +146,7 @@ def _covered_area(
 
 
 #: A heading estimated more than this below the ``keep``-th best so far cannot rank among the
-#: best ``keep``: :func:`planner.fitted_cells.cover_picks` ranks the estimates rounded to a
+#: best ``keep``: :func:`planner.cover_picks.cover_picks` ranks the estimates rounded to a
 #: µm², and this is a thousand of them [m²].
 _KEEP_MARGIN_M2 = 1e-3
 

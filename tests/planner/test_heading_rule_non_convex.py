@@ -50,7 +50,7 @@ REAL_CASES = [
     # (planner.fit_screen).
     pytest.param("germany_2018_2019", "germany_2018_2019-9", "small_tractor", id="germany-9-small"),
     # 0.10 pp beyond the slack while a move's drop that clashed with another's was not
-    # tried again (planner.cell_route._LineDrops): 174.19° against 169°.
+    # tried again (planner.cell_moves._LineDrops): 174.19° against 169°.
     pytest.param(
         "germany_2018_2019", "germany_2018_2019-77", "small_tractor", id="germany-77-small"
     ),
@@ -60,7 +60,7 @@ REAL_CASES = [
     # now the neighbours of such a heading are fitted too (planner.fitted_cells._probed).
     pytest.param("germany_2018_2019", "germany_2018_2019-21", "hand_tractor", id="germany-21"),
     # Known gap (issue 9): a move between cells with no curve drops the lines that block it
-    # (planner.cell_route._LineDrops), and driven cover jumps between headings the fitted
+    # (planner.cell_moves._LineDrops), and driven cover jumps between headings the fitted
     # screen ranks alike: the search drives 89° (79.79 %), 0.16 pp beyond the slack of 80°
     # (80.16 %; ``python -m bench.heading_brute_force_real small_tractor``: 7 of 223 short).
     pytest.param(

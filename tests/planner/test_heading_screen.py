@@ -14,10 +14,11 @@ from shapely import Polygon, affinity
 from bench.screen_speed import prepared_field
 from planner.cell_kernels import sweep_cells
 from planner.cell_plans import cover_heading, cover_screened
+from planner.cover_picks import SCREENED_FITS
 from planner.coverage import _laid_out
 from planner.decomposition import SweepRings, _cuts, sweep_rings
 from planner.fit_screen import turn_table
-from planner.fitted_cells import SCREENED_FITS, _turn_count, turn_change_m
+from planner.fitted_cells import _turn_count, turn_change_m
 from planner.heading_screen import (
     fit_screened,
     fit_screened_cells,

@@ -1,4 +1,4 @@
-"""Cells as the vehicle drives them (planner.cell_route): lines dropped at a cell's sides."""
+"""Cells as the vehicle drives them (planner.cell_moves): lines dropped at a cell's sides."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from planner.cell_route import _without_lines
+from planner.cell_moves import _without_lines
 from planner.line_ends import FittedLines
 from planner.turns import TurnCurves
 
