@@ -7,35 +7,58 @@ turning radius: one that pivots drives a corner on the spot): the turn's points 
 a point half a metre back along the line it leaves and half a metre on along the line it
 joins, so that a heading that jumps where the turn meets a line counts too. A turn is
 *sharp* where the circle through three consecutive points is tighter than the turning
-radius allows (the tolerance of ``tests/planner/plan_checks.py``). Turns within a cell are
-held to the radius by the tests; the sharp ones are moves between cells for which no curve
-was found, even with the lines shortened (:mod:`planner.move_curves`) or up to three of
-them dropped (``planner.cell_moves._LineDrops``): the shortest path inside the machine area,
-with corners (:func:`planner.cell_moves.moves_between_cells`).
+radius even at the least the exported points allow: they are rounded to 1e-9°, which on
+steps of a few centimetres can tighten a circle by a tenth (:func:`curvatures`). Turns
+within a cell are held to the radius by the tests; the sharp ones are moves between cells
+for which no curve was found, even with the lines shortened (:mod:`planner.move_curves`),
+up to three of them dropped (``planner.cell_moves._LineDrops``) or the vehicle's arcs
+searched (:mod:`planner.move_search`): the shortest path inside the machine area, with
+corners (:func:`planner.cell_moves.moves_between_cells`).
 Not part of ``make bench``.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 
 import numpy as np
 
 from bench.bench_fields import DATASETS, INTERVAL_M, load
 from planner import PlannerError, plan_coverage
+from planner.pipeline import LONLAT_DECIMALS
 from planner.projection import field_frame
 
 #: Points this far along the lines on either side are added to each turn [m].
 SEAM_M = 0.5
+#: The most an exported point may lie from where the planner put it [m]: half the last of
+#: :data:`planner.pipeline.LONLAT_DECIMALS` decimal degrees in both coordinates, at
+#: 111.32 km a degree (about 0.08 mm).
+ROUNDING_M = 0.5 * 10.0**-LONLAT_DECIMALS * 111_320.0 * math.sqrt(2.0)
 
 
-def curvatures(points: np.ndarray) -> np.ndarray:
-    """Curvature [1/m] of the circle through every three consecutive points (steps ≥ 5 cm)."""
+def curvatures(points: np.ndarray, rounding_m: float = ROUNDING_M) -> np.ndarray:
+    """Curvature [1/m] of the circle through every three consecutive points, at its least.
+
+    Each point may lie up to ``rounding_m`` from where the planner put it (the export's
+    rounding). That turns each step's direction by up to ``2 rounding_m / step`` and
+    changes the chord by up to ``2 rounding_m``: on steps of a few centimetres a circle
+    through three rounded points can be a tenth tighter than the curve. So each curvature
+    is the least the points allow: ``2 sin(turn) / chord`` with the turn less that error and
+    the chord more (steps of 5 cm or more).
+    """
     a, b, c = points[:-2], points[1:-1], points[2:]
     ab, bc, ca = (np.hypot(*(q - p).T) for p, q in ((a, b), (b, c), (c, a)))
-    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
     ok = (ab > 0.05) & (bc > 0.05) & (ca > 0.05)
-    return np.asarray(2.0 * cross[ok] / (ab * bc * ca)[ok])
+    first, second = (b - a)[ok], (c - b)[ok]
+    cross = first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0]
+    turn = np.arctan2(np.abs(cross), np.einsum("ij,ij->i", first, second))
+    turn_error = 2.0 * rounding_m * (1.0 / ab[ok] + 1.0 / bc[ok])
+    least_sin = np.minimum(
+        np.sin(np.clip(turn - turn_error, 0.0, np.pi)),
+        np.sin(np.clip(turn + turn_error, 0.0, np.pi)),
+    )
+    return np.asarray(2.0 * least_sin / (ca[ok] + 2.0 * rounding_m))
 
 
 def sharp_turns(field: object, vehicle: str) -> tuple[int, int]:
@@ -64,7 +87,7 @@ def sharp_turns(field: object, vehicle: str) -> tuple[int, int]:
             ]
         )
         turns += 1
-        sharp += bool((curvatures(seam) > 1.0 / radius * 1.02 + 0.02).any())
+        sharp += bool((curvatures(seam) > 1.0 / radius * (1.0 + 1e-6)).any())
     return turns, sharp
 
 
