@@ -3,8 +3,9 @@
 Every move between cells is the vehicle's own turn if it stays in the machine area; else,
 for a vehicle with a turning radius, a curve for which the lines it joins give up some
 length (:mod:`planner.move_curves`), or, failing that, for which up to three lines at
-either end of the move are dropped (:class:`_LineDrops`); and otherwise the shortest path
-inside the field (:mod:`planner.routing`), with corners.
+either end of the move are dropped (:class:`_LineDrops`), or, as a last resort, a path of
+the vehicle's arcs searched for (:mod:`planner.move_search`); and otherwise the shortest
+path inside the field (:mod:`planner.routing`), with corners.
 """
 
 from __future__ import annotations
@@ -19,10 +20,11 @@ import numpy.typing as npt
 from planner.cell_plans import CellPlan
 from planner.line_ends import FittedLines
 from planner.lines import from_sweep
-from planner.move_curves import drivable_moves
+from planner.move_curves import PULL_STEPS_R, drivable_moves
+from planner.move_search import search_move
 from planner.route_builder import densify
 from planner.routing import FieldRouter
-from planner.turns import STEP_M, TurnEnds, turn_range, vehicle_turns
+from planner.turns import STEP_M, TurnEnds, turn_range, turning_radius_m, vehicle_turns
 from planner.types import Vehicle
 
 FloatArray = npt.NDArray[np.float64]
@@ -59,7 +61,8 @@ def drive_cells(
     line's start of the next (:func:`moves_between_cells`), and may shorten each of the two
     lines by less than half, keeping :data:`_KEPT_LINE_M` of it (a cell of one line gives up
     length at both ends). Where a vehicle with a turning radius finds no curve for a move,
-    up to three lines at its ends may go instead, whole cells too (:class:`_LineDrops`).
+    up to three lines at its ends may go instead, whole cells too (:class:`_LineDrops`);
+    a move no drop serves is searched for (:meth:`_LineDrops.search_cornered`).
     """
     driven = [fit for fit in fitted if len(fit.u)]
     if len(driven) < 2:
@@ -67,6 +70,7 @@ def drive_cells(
     drops = _LineDrops(plan.heading_deg, driven, router, vehicle)
     if vehicle.min_turn_radius_m > 0.0:
         drops.drop_for_curves()
+        drops.search_cornered()
     kept, moves = drops.result()
     cells = iter(kept)
     return DrivenCells([next(cells) if len(fit.u) else fit for fit in fitted], moves)
@@ -197,6 +201,35 @@ class _LineDrops:
             while self._drop_round(count):
                 pass
 
+    def search_cornered(self) -> None:
+        """Search for a path of the vehicle's arcs for each move that still has corners.
+
+        The last resort, once no drop serves (:func:`planner.move_search.search_move`): the
+        move may shorten its lines by the steps :func:`planner.move_curves.drivable_moves`
+        tries, within their room. A move the search does not find keeps its corners.
+        """
+        steps_m = np.asarray(PULL_STEPS_R) * turning_radius_m(self.vehicle)
+        for key in self._keys(self.first_dropped, self.last_dropped):
+            if self.planned[key].curved:
+                continue
+            i, j, last, first = key
+            ends, back_room_m, on_room_m = _move_ends(
+                self.heading_deg,
+                [_without_lines(self.cells[i], 0, last)],
+                [_without_lines(self.cells[j], first, 0)],
+            )
+            found = search_move(
+                ends,
+                steps_m[steps_m <= back_room_m[0] + 1e-9],
+                steps_m[steps_m <= on_room_m[0] + 1e-9],
+                router=self.router,
+                vehicle=self.vehicle,
+            )
+            if found is not None:
+                self.planned[key] = _PlannedMove(
+                    found.points, found.pulled_back_m, found.pushed_on_m, True
+                )
+
     def _drop_round(self, count: int) -> bool:
         """One round of :meth:`drop_for_curves` at ``count`` lines; whether it dropped any."""
         now = self._keys(self.first_dropped, self.last_dropped)
@@ -264,11 +297,32 @@ def _moves_from_to(
     Move ``k`` leaves the end of ``leaving[k]``'s last line for the start of ``joining[k]``'s
     first (:func:`moves_between_cells`, which gives the result).
     """
+    ends, back_room_m, on_room_m = _move_ends(heading_deg, leaving, joining)
+    return moves_between_cells(
+        np.stack([ends.x0, ends.y0], axis=1),
+        ends.yaw0,
+        np.stack([ends.x1, ends.y1], axis=1),
+        ends.yaw1,
+        router=router,
+        vehicle=vehicle,
+        back_room_m=back_room_m,
+        on_room_m=on_room_m,
+    )
+
+
+def _move_ends(
+    heading_deg: float, leaving: list[FittedLines], joining: list[FittedLines]
+) -> tuple[TurnEnds, FloatArray, FloatArray]:
+    """Return the moves from ``leaving[k]``'s last line's end to ``joining[k]``'s first start.
+
+    Returns their ends (local [m], headings [rad]) and the most each may shorten the line
+    it leaves and the line it joins [m] (less than half, keeping :data:`_KEPT_LINE_M`).
+    """
     first_u = np.array([fit.u[0] for fit in joining])
     first_v = np.array([fit.v_start[0] for fit in joining])
     last_u = np.array([fit.u[-1] for fit in leaving])
-    x0, y0 = from_sweep(first_u, first_v, heading_deg)
-    x1, y1 = from_sweep(last_u, np.array([fit.v_end[-1] for fit in leaving]), heading_deg)
+    x_on, y_on = from_sweep(first_u, first_v, heading_deg)
+    x_off, y_off = from_sweep(last_u, np.array([fit.v_end[-1] for fit in leaving]), heading_deg)
     first_m = np.array([abs(fit.v_end[0] - fit.v_start[0]) for fit in joining])
     last_m = np.array([abs(fit.v_end[-1] - fit.v_start[-1]) for fit in leaving])
     xb, yb = from_sweep(last_u, np.array([fit.v_start[-1] for fit in leaving]), heading_deg)
@@ -279,17 +333,15 @@ def _moves_from_to(
     leaves_up = np.array([fit.v_end[-1] >= fit.v_start[-1] for fit in leaving], dtype=bool)
     joins_up = np.array([fit.v_end[0] >= fit.v_start[0] for fit in joining], dtype=bool)
     here_yaw = np.where(
-        last_m > 1e-9, np.arctan2(y1 - yb, x1 - xb), np.where(leaves_up, along, along + math.pi)
+        last_m > 1e-9,
+        np.arctan2(y_off - yb, x_off - xb),
+        np.where(leaves_up, along, along + math.pi),
     )
-    return moves_between_cells(
-        np.stack([x1, y1], axis=1),
-        here_yaw,
-        np.stack([x0, y0], axis=1),
-        np.where(joins_up, along, along + math.pi),
-        router=router,
-        vehicle=vehicle,
-        back_room_m=np.maximum((last_m - _KEPT_LINE_M) / 2.0, 0.0),
-        on_room_m=np.maximum((first_m - _KEPT_LINE_M) / 2.0, 0.0),
+    ends = TurnEnds(x_off, y_off, here_yaw, x_on, y_on, np.where(joins_up, along, along + math.pi))
+    return (
+        ends,
+        np.maximum((last_m - _KEPT_LINE_M) / 2.0, 0.0),
+        np.maximum((first_m - _KEPT_LINE_M) / 2.0, 0.0),
     )
 
 
@@ -355,7 +407,8 @@ def moves_between_cells(
     radius takes a curve that gives up some of the lines' length
     (:func:`planner.move_curves.drivable_moves`, at most ``back_room_m[k]`` off the line it
     leaves and ``on_room_m[k]`` off the one it joins), or, if none is found, that shortest
-    path, whose corners it cannot turn (a known weakness, counted by ``bench.move_corners``).
+    path, whose corners it cannot turn (:func:`drive_cells` then drops lines or searches for a
+    path; ``bench.move_corners`` counts the moves left with corners).
 
     Parameters
     ----------
