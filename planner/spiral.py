@@ -26,9 +26,12 @@ lane change to the next round (or the move to the core's first line) fits inside
 its body, so the route is one continuous, drivable path: each segment begins where the one
 before it ends. Where no curve reaches the core's first line, the core is planned again from
 up to :data:`_CORE_ENTRIES` other points of the last round (its start then usually moves to
-another corner), and the first plan a curve reaches is driven. Only where no such curve is
-found (a join that would have to wind round an obstacle) does the join fall back to the
-shortest move inside the field (:class:`planner.routing.FieldRouter`), with corners.
+another corner), and the first plan a curve reaches is driven. Where no such curve is found
+(a join that would have to wind round an obstacle), and between two parts of the core, the
+join is a chain of turns beside the shortest path's corners (:mod:`planner.move_curves`) or
+the vehicle's arcs searched for (:mod:`planner.move_search`); only where neither is found
+does it fall back to the shortest move inside the field
+(:class:`planner.routing.FieldRouter`), with corners.
 """
 
 from __future__ import annotations
@@ -178,7 +181,10 @@ def order_spiral(
     if start_xy is not None:
         route.append("transit", None, np.array([start_xy]), "start")
     # A vehicle that pivots tills each sharp corner of a round with a loop the other way.
-    joiner = RoundJoiner(route, router, allowed, radius, loops=machine.min_turn_radius_m == 0.0)
+    pivots = machine.min_turn_radius_m == 0.0
+    joiner = RoundJoiner(
+        route, router, allowed, radius, loops=pivots, vehicle=None if pivots else machine
+    )
     round_index = 0
     for rings in levels:
         for ring in _nearest_first(rings, joiner.position()):

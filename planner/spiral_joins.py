@@ -18,13 +18,20 @@ import shapely
 from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 from shapely import LinearRing
 
+from planner.move_curves import drivable_moves
+from planner.move_search import search_move
 from planner.round_corners import corner_loops
 from planner.round_shapes import resample_ring, round_step_m
 from planner.route_builder import RouteBuilder, densify
 from planner.routing import FieldRouter
 from planner.turns import STEP_M, TurnEnds, dubins_turn, dubins_turn_length_m
+from planner.types import Vehicle
 
 FloatArray = npt.NDArray[np.float64]
+
+#: Poses a join's search expands at most (a spiral asks for few: more than a move between
+#: cells may).
+SEARCHED_POSES = 5000
 
 #: Candidate joins checked exactly (chords and all), cheapest first.
 _EXACT_CHECKS = 32
@@ -47,6 +54,7 @@ class RoundJoiner:
         radius: float,
         *,
         loops: bool = False,
+        vehicle: Vehicle | None = None,
     ) -> None:
         self.route = route
         self.router = router
@@ -54,6 +62,8 @@ class RoundJoiner:
         self.radius = radius
         self.step = round_step_m(radius)
         self.loops = loops  # corner loops (planner.round_corners) in every round
+        #: A vehicle with a turning radius: where no curve joins, its arcs are searched.
+        self.vehicle = vehicle
         #: The rounds as driven, in pieces that do not overlap themselves, in order.
         self.driven: list[FloatArray] = []
         #: The round being driven, its points from the entry on, and its round index.
@@ -98,7 +108,10 @@ class RoundJoiner:
         start = _core_start(core)
         first = np.array([core.x[start], core.y[start]])
         if self.ring is not None:
-            curve, extra = join if join is not None else (self._routed_from_round(first), 0)
+            first_yaw = _core_pose(core)[1]
+            curve, extra = (
+                join if join is not None else (self._routed_from_round(first, first_yaw), 0)
+            )
             self._leave_round(extra, curve, last_role=core.roles[start])
             self.ring = None
             self.route.lines[-1] = core.lines[start]
@@ -108,7 +121,10 @@ class RoundJoiner:
             self.route.lines[-1] = core.lines[start]
         elif self.route.x:
             here = (self.route.x[-1], self.route.y[-1])
-            self.route.append("turn", None, self._routed(here, (first[0], first[1])), "turn")
+            before = (self.route.x[-2], self.route.y[-2]) if len(self.route.x) > 1 else here
+            here_yaw = math.atan2(here[1] - before[1], here[0] - before[0])
+            move = self._routed(here, (first[0], first[1]), poses=(here_yaw, _core_pose(core)[1]))
+            self.route.append("turn", None, move, "turn")
             self.route.roles[-1] = core.roles[start]
             self.route.lines[-1] = core.lines[start]
         else:
@@ -266,20 +282,55 @@ class RoundJoiner:
         # No drivable join found: the shortest move inside the field, with corners.
         target = _nearest(points, self.ring[0]) if self.ring is not None else 0
         assert self.ring is not None
-        return self._routed_from_round(points[target]), 0, target
+        after = points[(target + 1) % len(points)] - points[target]
+        target_yaw = math.atan2(after[1], after[0])
+        return self._routed_from_round(points[target], target_yaw), 0, target
 
-    def _routed_from_round(self, xy: FloatArray) -> FloatArray:
-        """Return the routed move from the current round's entry to ``xy`` (no curve reaches it)."""
-        assert self.ring is not None
-        return self._routed(tuple(self.ring[0]), (float(xy[0]), float(xy[1])))
+    def _routed_from_round(self, xy: FloatArray, yaw: float) -> FloatArray:
+        """Return the move from the current round's entry to pose ``xy``, ``yaw``.
 
-    def _routed(self, here: tuple[float, float], there: tuple[float, float]) -> FloatArray:
-        """Return the shortest move inside the field, as points at most :data:`STEP_M` apart.
-
-        The fallback where no drivable curve joins: it keeps the path's corners (a vehicle
-        with a turning radius cannot take them: a known weakness), but is exported as densely
-        as every other turn (R1).
+        Where no curve reaches it (:meth:`_routed`).
         """
+        assert self.ring is not None
+        entry = self.ring[0]
+        arrival = entry - self.ring[-1]  # the vehicle comes round to its entry
+        return self._routed(
+            (float(entry[0]), float(entry[1])),
+            (float(xy[0]), float(xy[1])),
+            poses=(math.atan2(arrival[1], arrival[0]), yaw),
+        )
+
+    def _routed(
+        self,
+        here: tuple[float, float],
+        there: tuple[float, float],
+        *,
+        poses: tuple[float, float],
+    ) -> FloatArray:
+        """Return a move where no curve joins, as points at most :data:`STEP_M` apart.
+
+        ``poses``: the headings at ``here`` and ``there`` [rad]. With a vehicle with a
+        turning radius, a chain of its turns beside the shortest path's corners
+        (:func:`planner.move_curves.drivable_moves`, the lines kept whole), else its arcs
+        searched for (:func:`planner.move_search.search_move`), the body inside either way.
+        Else, or if neither is found, the shortest move inside the field, with its corners
+        (a vehicle with a turning radius cannot take them), exported as densely as every
+        other turn (R1).
+        """
+        if self.vehicle is not None:
+            ends = TurnEnds(*(np.array([v]) for v in (*here, poses[0], *there, poses[1])))
+            none = np.zeros(1)
+            chained = drivable_moves(
+                ends, back_room_m=none, on_room_m=none, router=self.router, vehicle=self.vehicle
+            ).curves[0]
+            if chained is not None and shapely.covers(self.allowed, shapely.LineString(chained)):
+                return chained
+            found = search_move(
+                ends, none, none, router=self.router, vehicle=self.vehicle,
+                most_expansions=SEARCHED_POSES,
+            )  # fmt: skip
+            if found is not None and shapely.covers(self.allowed, shapely.LineString(found.points)):
+                return found.points
         return densify(self.router.path(here, there), STEP_M)
 
 

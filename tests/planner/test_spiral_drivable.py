@@ -16,7 +16,8 @@ from planner import parse_field_geojson, plan_coverage, spiral
 from planner.projection import field_frame
 from planner.types import CoveragePlan
 from planner.vehicles import PRESETS
-from tests.conftest import field_from_local
+from tests.conftest import FIELDS_DIR, field_from_local
+from tests.planner.field_files import shared_feature
 from tests.planner.plan_checks import TOLERANCE_M, plan_vehicle, turn_curvatures
 
 SETTINGS = settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -213,3 +214,18 @@ def test_a_small_tractor_swings_wide_of_a_tree() -> None:
     around = [r for r in rounds if Polygon(r.coords).contains(centre) and r.length < 100]
     assert around, "no round goes round the tree"
     assert min(r.distance(centre) for r in around) >= 3.0 - 0.05
+
+
+def test_a_join_between_parts_of_the_core_is_a_curve_on_a_real_field() -> None:
+    """south_africa_2017-61, small tractor at 4 m: the move between two parts of the core
+    was the shortest path, with corners; now a chain of the vehicle's turns beside its
+    corners (planner.move_curves), and every turn of the plan is within the radius."""
+    feature = shared_feature(FIELDS_DIR / "south_africa_2017.geojson", "south_africa_2017-61")
+    field = shapely.geometry.shape(feature["geometry"])
+    plan = plan_coverage(field, interval_m=4.0, pattern="spiral", vehicle="small_tractor")
+    assert_spiral_drivable(plan)
+    radius = PRESETS["small_tractor"].min_turn_radius_m
+    for kind, xy, _ in driven(plan):
+        if kind == "turn":
+            # Waypoints are rounded to 1e-9° (0.1 mm): allow for that on short steps.
+            assert (turn_curvatures(xy) <= 1.0 / radius * 1.02 + 0.02).all()
