@@ -1,11 +1,12 @@
 """How many turns between lines a vehicle with a turning radius cannot drive as exported (R1).
 
-``python -m bench.move_corners [VEHICLE] [--limit K]`` plans every real field of
-:mod:`bench.bench_fields` at its 4 m interval (VEHICLE defaults to ``small_tractor``) and
-looks at each turn between two lines as the vehicle would drive it (a vehicle with a
-turning radius: one that pivots drives a corner on the spot): the turn's points with
-a point half a metre back along the line it leaves and half a metre on along the line it
-joins, so that a heading that jumps where the turn meets a line counts too. A turn is
+``python -m bench.move_corners [VEHICLE] [--limit K] [--pattern P] [--every N]`` plans every
+real field of :mod:`bench.bench_fields` at its 4 m interval (VEHICLE defaults to
+``small_tractor``; ``--every 9``: the 25 fields of ``bench.spiral_times``) and looks at each
+turn between two lines (with ``--pattern spiral``, rounds too) as the vehicle would drive
+it (a vehicle with a turning radius: one that pivots drives a corner on the spot): the
+turn's points with a point half a metre back along what it leaves and half a metre on
+along what it joins, so that a heading that jumps where the turn meets a line counts too. A turn is
 *sharp* where the circle through three consecutive points is tighter than the turning
 radius even at the least the exported points allow: they are rounded to 1e-9°, which on
 steps of a few centimetres can tighten a circle by a tenth (:func:`curvatures`). Turns
@@ -37,15 +38,28 @@ SEAM_M = 0.5
 ROUNDING_M = 0.5 * 10.0**-LONLAT_DECIMALS * 111_320.0 * math.sqrt(2.0)
 
 
-def curvatures(points: np.ndarray, rounding_m: float = ROUNDING_M) -> np.ndarray:
-    """Curvature [1/m] of the circle through every three consecutive points, at its least.
+def curvatures(points: np.ndarray, *, rounding_m: float = ROUNDING_M) -> np.ndarray:
+    """A lower bound of the curvature of the circle through every three consecutive points.
 
-    Each point may lie up to ``rounding_m`` from where the planner put it (the export's
-    rounding). That turns each step's direction by up to ``2 rounding_m / step`` and
-    changes the chord by up to ``2 rounding_m``: on steps of a few centimetres a circle
-    through three rounded points can be a tenth tighter than the curve. So each curvature
-    is the least the points allow: ``2 sin(turn) / chord`` with the turn less that error and
-    the chord more (steps of 5 cm or more).
+    Each exported point may lie up to ``rounding_m`` from where the planner put it. That
+    turns each step's direction by up to about ``2 rounding_m / step`` and changes the
+    chord by up to ``2 rounding_m``, so on steps of a few centimetres a circle through three
+    rounded points can be a tenth tighter than the curve. Each curvature is
+    ``2 sin(turn) / chord`` with the turn less that error and the chord more: the least the
+    points allow. The bound is loose on short steps (on 6 cm steps an arc of 2.4 m would
+    pass for 3 m): a count of sharp turns says which are provably sharp.
+
+    Parameters
+    ----------
+    points : ndarray, shape (k, 2)
+        A polyline, local [m]; triples with a step under 5 cm are left out.
+    rounding_m : float, optional
+        How far each point may lie from the curve [m] (0: the points are exact).
+
+    Returns
+    -------
+    ndarray
+        Curvature [1/m] of each triple kept.
     """
     a, b, c = points[:-2], points[1:-1], points[2:]
     ab, bc, ca = (np.hypot(*(q - p).T) for p, q in ((a, b), (b, c), (c, a)))
@@ -61,31 +75,52 @@ def curvatures(points: np.ndarray, rounding_m: float = ROUNDING_M) -> np.ndarray
     return np.asarray(2.0 * least_sin / (ca[ok] + 2.0 * rounding_m))
 
 
-def sharp_turns(field: object, vehicle: str) -> tuple[int, int]:
-    """Plan ``field``; return its turns between lines and how many of them are sharp."""
-    plan = plan_coverage(field, interval_m=INTERVAL_M, vehicle=vehicle)  # type: ignore[arg-type]
+#: The segments a counted turn may leave or join: with the spiral, its rounds too.
+_DRIVEN = {"boustrophedon": ("line",), "snake": ("line",), "spiral": ("line", "round")}
+
+
+def _way(points: np.ndarray, at_end: bool, kind: str) -> np.ndarray | None:
+    """Unit direction a segment is driven in where a turn leaves it (``at_end``) or joins it.
+
+    A line's whole length (straight), a round's last or first step; None if it has none.
+    """
+    if kind == "line":
+        step = points[-1] - points[0]
+    else:
+        step = points[-1] - points[-2] if at_end else points[1] - points[0]
+    length_m = float(np.hypot(*step))
+    return step / length_m if length_m > 0.0 else None
+
+
+def sharp_turns(field: object, vehicle: str, pattern: str = "boustrophedon") -> tuple[int, int]:
+    """Plan ``field``; return its turns between driven segments and how many are sharp.
+
+    A turn is counted where it leaves and joins a line (and, for the spiral, a round).
+    """
+    plan = plan_coverage(
+        field,  # type: ignore[arg-type]
+        interval_m=INTERVAL_M,
+        vehicle=vehicle,
+        pattern=pattern,  # type: ignore[arg-type]
+    )
     assert plan.vehicle is not None
     radius = plan.vehicle.min_turn_radius_m or plan.vehicle.track_m / 2.0
     frame = field_frame(plan.field_lonlat)
     local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
     kinds = [s.kind for s in plan.segments]
+    driven = _DRIVEN[pattern]
     turns = sharp = 0
     for k in range(1, len(kinds) - 1):
-        if kinds[k] != "turn" or kinds[k - 1] != "line" or kinds[k + 1] != "line":
+        if kinds[k] != "turn" or kinds[k - 1] not in driven or kinds[k + 1] not in driven:
             continue
         before, turn, after = local[k - 1], local[k], local[k + 1]
-        back = before[-1] - before[0]
-        on = after[-1] - after[0]
-        back_m, on_m = float(np.hypot(*back)), float(np.hypot(*on))
-        if back_m <= 0.0 or on_m <= 0.0:
+        back = _way(before, True, kinds[k - 1])
+        on = _way(after, False, kinds[k + 1])
+        if back is None or on is None:
             continue
-        seam = np.vstack(
-            [
-                turn[:1] - back / back_m * min(SEAM_M, back_m),
-                turn,
-                turn[-1:] + on / on_m * min(SEAM_M, on_m),
-            ]
-        )
+        back_m = min(SEAM_M, float(np.hypot(*(before[-1] - before[0]))))
+        on_m = min(SEAM_M, float(np.hypot(*(after[-1] - after[0]))))
+        seam = np.vstack([turn[:1] - back * back_m, turn, turn[-1:] + on * on_m])
         turns += 1
         sharp += bool((curvatures(seam) > 1.0 / radius * (1.0 + 1e-6)).any())
     return turns, sharp
@@ -95,18 +130,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(prog="python -m bench.move_corners")
     parser.add_argument("vehicle", nargs="?", default="small_tractor")
     parser.add_argument("--limit", type=int, default=None, help="only the first LIMIT fields")
+    parser.add_argument("--pattern", choices=sorted(_DRIVEN), default="boustrophedon")
+    parser.add_argument(
+        "--every",
+        type=int,
+        default=1,
+        help="only fields 1, 1 + EVERY, … (bench.spiral_times: 9); default: all",
+    )
     args = parser.parse_args()
     fields = [(fid, f) for name in DATASETS for fid, f in load(name)][: args.limit]
+    if args.every > 1:
+        fields = fields[1 :: args.every]
     turns = sharp = with_sharp = 0
     for _, field in fields:
         try:
-            t, s = sharp_turns(field, args.vehicle)
+            t, s = sharp_turns(field, args.vehicle, args.pattern)
         except PlannerError:
             continue
         turns, sharp, with_sharp = turns + t, sharp + s, with_sharp + (s > 0)
     print(
-        f"{args.vehicle}, {len(fields)} fields at {INTERVAL_M:g} m: {sharp} of {turns} turns "
-        f"between lines tighter than the turning radius, on {with_sharp} fields"
+        f"{args.vehicle}, {args.pattern}, {len(fields)} fields at {INTERVAL_M:g} m: {sharp} of "
+        f"{turns} turns tighter than the turning radius, on {with_sharp} fields"
     )
 
 

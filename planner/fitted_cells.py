@@ -15,7 +15,6 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -32,11 +31,7 @@ from planner.turn_reach import end_reach_m
 from planner.turns import TurnEnds, vehicle_turns
 from planner.types import Objective, Pattern, Vehicle
 
-if TYPE_CHECKING:
-    pass
-
 FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Path lengths closer than this count as equal [m].
 _TIE_M = 1e-6

@@ -1,18 +1,19 @@
-"""A last resort for a move between cells that no curve serves: a search over the vehicle's arcs.
+"""A last resort for a move no curve serves: a search over the vehicle's arcs.
 
-A move whose curve is neither the vehicle's own turn nor a chain of turns beside the shortest
-path's corners (:mod:`planner.move_curves`), even with lines dropped
-(:class:`planner.cell_moves._LineDrops`), is searched for here, as a hybrid A* search does
-(Dolgov et al., "Practical search techniques in path planning for autonomous driving",
-2008): from poses along the line it leaves, steps of the vehicle's tightest arcs either way
-and straight ahead, on a grid of positions and headings, until the vehicle's own turn from
-the pose reached to a pose along the line it joins stays inside the machine area. Every
-step is an arc of the turning radius or a straight, so the path's curvature never exceeds
-``1 / radius``; it is forward only (a vehicle that may reverse drives it too).
+A move between two line ends (or between a spiral's rounds and its core) whose curve is
+neither the vehicle's own turn nor a chain of turns beside the shortest path's corners
+(:mod:`planner.move_curves`) is searched for here, as a hybrid A* search does (Dolgov et
+al., "Practical search techniques in path planning for autonomous driving", 2008): from
+poses along the line it leaves, steps of the vehicle's tightest arcs either way and
+straight ahead, on a grid of positions and headings, until the vehicle's own turn from a
+pose reached to a pose along the line it joins stays inside the machine area. Every step is
+an arc of the turning radius or a straight, forward, so the path's curvature never exceeds
+``1 / radius``; the last piece is the vehicle's own turn (a Reeds–Shepp curve, reversing,
+for a vehicle that may reverse).
 
-Written here rather than taken from a planning library: it is a hundred lines on the
-planner's own turns and inside tests, and deterministic (R7), where sampling planners
-(OMPL's) are random and a large dependency for the few moves per plan that need it.
+Written here rather than taken from a planning library: it runs on the planner's own turns
+and inside tests, and it is deterministic (R7), where sampling planners (OMPL's) are random
+and a large dependency for the few moves per plan that need it.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from __future__ import annotations
 import heapq
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -28,7 +30,9 @@ from planner.routing import FieldRouter
 from planner.turns import (
     SAGITTA_M,
     STEP_M,
+    TurnCurves,
     TurnEnds,
+    dubins_turn,
     turning_radius_m,
     vehicle_turns,
 )
@@ -42,13 +46,13 @@ STEP_R = 0.6
 CELL_R = 0.5
 HEADINGS = 36
 #: The search gives up after this many poses expanded. On the 223 real fields at 4 m with
-#: the small tractor it finds as many moves as with 20 times more (3 of the 14 its drives
-#: ask for), and the 11 it does not find cost about 0.03 s each.
+#: the small tractor it finds 3 of the 14 moves its drives ask for, as many as with 6,000,
+#: and the 11 it does not find cost about 0.03 s each; 20,000 find 7, for 3.7 s in all.
 MOST_EXPANSIONS = 1000
 #: The vehicle's turn to the line it joins is tried from every this many poses expanded.
 SHOT_EVERY = 4
-#: Weighted A*: the heuristic counts this much more, which finds a path in far fewer steps
-#: (at most this factor longer than the grid's shortest).
+#: Weighted A*: the heuristic (the straight distance to the nearest goal) counts this much
+#: more, which finds a path in far fewer steps, not the shortest.
 HEURISTIC_WEIGHT = 1.5
 #: A step on an arc costs this much more than one straight ahead, and a step that turns the
 #: other way from the step before (or straightens) this many steps more: fewer wiggles.
@@ -57,6 +61,8 @@ SWITCH_COST = 0.5
 #: A metre of line given up (a pulled-back end or a pushed-on start) costs as much as this
 #: many metres driven: coverage first.
 PULL_WEIGHT = 10.0
+#: The steering of the search's three steps, in the order of :func:`_steps`' shapes.
+_STEERING = (1, 0, -1)  # left, straight, right
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,6 +84,19 @@ class SearchedMove:
     pushed_on_m: float
 
 
+class _Node(NamedTuple):
+    """A pose the search reached, and how."""
+
+    x: float
+    y: float
+    yaw: float
+    cost: float  # length driven, plus the pull-back weighted and the turning penalties
+    parent: int  # index of the node it was reached from, -1 for a start
+    points: FloatArray  # from the parent's pose (excluded) to this one, local [m]
+    pulled_back_m: float  # of the start it comes from
+    steer: int  # of the step that reached it: +1 left, 0 straight, -1 right
+
+
 def search_move(
     ends: TurnEnds,
     pulls_back_m: FloatArray,
@@ -87,7 +106,7 @@ def search_move(
     vehicle: Vehicle,
     most_expansions: int = MOST_EXPANSIONS,
 ) -> SearchedMove | None:
-    """Search for a forward path of the vehicle's arcs for one move; None if none is found.
+    """Search for a path of the vehicle's arcs for one move; None if none is found.
 
     Parameters
     ----------
@@ -95,9 +114,9 @@ def search_move(
         One move: the end of the line it leaves and the start of the line it joins, with
         their headings, local [m] and [rad].
     pulls_back_m, pushes_on_m : ndarray
-        The pulls the move may give the line it leaves and the pushes the line it joins,
-        least first [m]: the search starts from each pulled-back end (each costing
-        :data:`PULL_WEIGHT` times its pull) and ends at any pushed-on start.
+        The pulls the move may give the line it leaves and the pushes the line it joins
+        [m], at least one each (0: none): the search starts from each pulled-back end (each
+        costing :data:`PULL_WEIGHT` times its pull) and ends at any pushed-on start.
     router : FieldRouter
         The machine area the path stays in.
     vehicle : Vehicle
@@ -108,176 +127,152 @@ def search_move(
     Returns
     -------
     SearchedMove or None
+
+    Raises
+    ------
+    ValueError
+        If ``pulls_back_m`` or ``pushes_on_m`` is empty.
     """
-    radius = turning_radius_m(vehicle)
-    step_m = STEP_R * radius
-    cell_m = CELL_R * radius
-    arc_step = min(STEP_M, 2.0 * radius * math.acos(max(-1.0, 1.0 - SAGITTA_M / radius)))
-    samples = max(1, math.ceil(step_m / arc_step))
+    if len(pulls_back_m) == 0 or len(pushes_on_m) == 0:
+        raise ValueError("search_move needs at least one pull-back and one push-on (0: none)")
+    radius_m = turning_radius_m(vehicle)
+    step_m = STEP_R * radius_m
+    cell_m = CELL_R * radius_m
     x0, y0, yaw0 = float(ends.x0[0]), float(ends.y0[0]), float(ends.yaw0[0])
     x1, y1, yaw1 = float(ends.x1[0]), float(ends.y1[0]), float(ends.yaw1[0])
-    goals = np.column_stack(
-        [
-            x1 + pushes_on_m * math.cos(yaw1),
-            y1 + pushes_on_m * math.sin(yaw1),
-            np.full(len(pushes_on_m), yaw1),
-        ]
-    )
-    # Each step's arcs from the origin heading along +x: left, straight, right.
-    t = np.arange(1, samples + 1) * (step_m / samples)
-    turned = t / radius
-    shapes = []
-    for side in (1.0, 0.0, -1.0):
-        if side == 0.0:
-            shapes.append(np.column_stack([t, np.zeros_like(t)]))
-        else:
-            shapes.append(
-                np.column_stack([radius * np.sin(turned), side * radius * (1.0 - np.cos(turned))])
-            )
-    shape_xy = np.stack(shapes)  # (3, samples, 2)
-    shape_yaw = np.array([step_m / radius, 0.0, -step_m / radius])
+    goals = np.column_stack([x1 + pushes_on_m * math.cos(yaw1), y1 + pushes_on_m * math.sin(yaw1)])
+    goal_costs = PULL_WEIGHT * pushes_on_m
+    shapes, shape_yaw = _steps(radius_m, step_m)
 
-    # Nodes: pose, cost so far, parent, the points from the parent's pose (exclusive), the
-    # pull of the start it comes from, and its step's steering (+1 left, 0, -1 right).
-    poses: list[tuple[float, float, float]] = []
-    costs: list[float] = []
-    parents: list[int] = []
-    pieces: list[FloatArray] = []
-    pulls: list[float] = []
-    steers: list[int] = []
-    best_at: dict[tuple[int, int, int], float] = {}
+    def estimate(x: float, y: float) -> float:
+        return float((np.hypot(goals[:, 0] - x, goals[:, 1] - y) + goal_costs).min())
+
+    def cell(x: float, y: float, yaw: float) -> tuple[int, int, int]:
+        # Positions from the move's start (so the path does not depend on where the field
+        # lies), headings rounded to the nearest of HEADINGS.
+        return (
+            math.floor((x - x0) / cell_m),
+            math.floor((y - y0) / cell_m),
+            round(yaw / (2.0 * math.pi) * HEADINGS) % HEADINGS,
+        )
+
+    nodes: list[_Node] = []
+    cheapest: dict[tuple[int, int, int], float] = {}  # the least cost reaching each cell
     frontier: list[tuple[float, int]] = []
 
-    def key(x: float, y: float, yaw: float) -> tuple[int, int, int]:
-        return (
-            math.floor(x / cell_m),
-            math.floor(y / cell_m),
-            int(round(yaw / (2.0 * math.pi) * HEADINGS)) % HEADINGS,
-        )
-
-    goal_costs = PULL_WEIGHT * pushes_on_m
-
-    def heuristics(at: FloatArray) -> list[float]:
-        # The straight distance to the cheapest goal: cheap, and with the weight it finds
-        # the moves of real fields in few steps.
-        distance_m = np.hypot(
-            at[:, None, 0] - goals[None, :, 0], at[:, None, 1] - goals[None, :, 1]
-        )
-        return list((distance_m + goal_costs).min(axis=1).tolist())
-
-    def push(
-        pose: tuple[float, float, float],
-        cost: float,
-        parent: int,
-        piece: FloatArray,
-        pull: float,
-        steer: int,
-        estimate: float,
-    ) -> None:
-        cell = key(*pose)
-        if best_at.get(cell, math.inf) <= cost:
+    def reach(node: _Node) -> None:
+        key = cell(node.x, node.y, node.yaw)
+        if cheapest.get(key, math.inf) <= node.cost:
             return
-        best_at[cell] = cost
-        poses.append(pose)
-        costs.append(cost)
-        parents.append(parent)
-        pieces.append(piece)
-        pulls.append(pull)
-        steers.append(steer)
-        node = len(poses) - 1
-        heapq.heappush(frontier, (cost + HEURISTIC_WEIGHT * estimate, node))
+        cheapest[key] = node.cost
+        nodes.append(node)
+        priority = node.cost + HEURISTIC_WEIGHT * estimate(node.x, node.y)
+        heapq.heappush(frontier, (priority, len(nodes) - 1))
 
-    starts = np.column_stack(
-        [
-            x0 - pulls_back_m * math.cos(yaw0),
-            y0 - pulls_back_m * math.sin(yaw0),
-            np.full(len(pulls_back_m), yaw0),
-        ]
-    )
-    for start, pull, estimate in zip(
-        starts, pulls_back_m.tolist(), heuristics(starts), strict=True
-    ):
-        pose = (float(start[0]), float(start[1]), yaw0)
-        push(pose, PULL_WEIGHT * pull, -1, start[None, :2].copy(), pull, 0, estimate)
+    for pull in pulls_back_m.tolist():
+        x, y = x0 - pull * math.cos(yaw0), y0 - pull * math.sin(yaw0)
+        reach(_Node(x, y, yaw0, PULL_WEIGHT * pull, -1, np.array([[x, y]]), pull, 0))
 
     expanded = 0
     while frontier and expanded < most_expansions:
-        _, node = heapq.heappop(frontier)
-        x, y, yaw = poses[node]
-        if best_at.get(key(x, y, yaw), math.inf) < costs[node]:
-            continue  # reached more cheaply since
+        _, at = heapq.heappop(frontier)
+        node = nodes[at]
+        if cheapest[cell(node.x, node.y, node.yaw)] < node.cost:
+            continue  # its cell was reached more cheaply since
         if expanded % SHOT_EVERY == 0:
-            found = _shot(node, poses, parents, pieces, goals, pushes_on_m, router, vehicle)
+            found = _shot(
+                at, nodes, goals=goals, goal_yaw=yaw1, goal_costs=goal_costs,
+                router=router, vehicle=vehicle,
+            )  # fmt: skip
             if found is not None:
-                points, push_m = found
-                return SearchedMove(points, pulls[node], push_m)
+                points, g = found
+                return SearchedMove(points, node.pulled_back_m, float(pushes_on_m[g]))
         expanded += 1
-        cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
-        rotation = np.array([[cos_yaw, sin_yaw], [-sin_yaw, cos_yaw]])
-        moved = shape_xy @ rotation + np.array([x, y])  # (3, samples, 2)
-        held = np.flatnonzero(
-            router.holds_points(moved.reshape(-1, 2)).reshape(3, samples).all(axis=1)
-        )
-        if len(held) == 0:
-            continue
-        reached = np.column_stack([moved[held, -1], yaw + shape_yaw[held]])
-        for k, estimate in zip(held.tolist(), heuristics(reached), strict=True):
+        # The step shapes run along +x from the origin; rows are points, so the matrix
+        # that turns them by the node's heading is the transpose of the usual one.
+        cos_yaw, sin_yaw = math.cos(node.yaw), math.sin(node.yaw)
+        moved = shapes @ np.array([[cos_yaw, sin_yaw], [-sin_yaw, cos_yaw]])
+        moved += np.array([node.x, node.y])  # (3, samples, 2)
+        held = router.holds_points(moved.reshape(-1, 2)).reshape(moved.shape[:2]).all(axis=1)
+        for k in np.flatnonzero(held).tolist():
+            steer = _STEERING[k]
+            turning = TURN_COST * abs(steer) + SWITCH_COST * (steer != node.steer)
             end = moved[k, -1]
-            steer = 1 - k  # left, straight, right
-            step_cost = step_m * (
-                1.0 + TURN_COST * abs(steer) + SWITCH_COST * (steer != steers[node])
-            )
-            push(
-                (float(end[0]), float(end[1]), yaw + float(shape_yaw[k])),
-                costs[node] + step_cost,
-                node,
-                moved[k],
-                pulls[node],
-                steer,
-                estimate,
+            reach(
+                _Node(
+                    float(end[0]),
+                    float(end[1]),
+                    node.yaw + float(shape_yaw[k]),
+                    node.cost + step_m * (1.0 + turning),
+                    at,
+                    moved[k],
+                    node.pulled_back_m,
+                    steer,
+                )  # fmt: skip
             )
     return None
 
 
+def _steps(radius_m: float, step_m: float) -> tuple[FloatArray, FloatArray]:
+    """Return the search's three steps from the origin heading along +x: left, straight, right.
+
+    Returns their points, shape (3, samples, 2) (the origin excluded; at most ``STEP_M``
+    apart and close enough that a chord of an arc stays within ``SAGITTA_M`` of it), and
+    the heading each turns by [rad].
+    """
+    arc_step = min(STEP_M, 2.0 * radius_m * math.acos(max(-1.0, 1.0 - SAGITTA_M / radius_m)))
+    samples = max(1, math.ceil(step_m / arc_step))
+    along = np.arange(1, samples + 1) * (step_m / samples)
+    turned = along / radius_m
+    shapes = [
+        np.column_stack([radius_m * np.sin(turned), side * radius_m * (1.0 - np.cos(turned))])
+        if side
+        else np.column_stack([along, np.zeros_like(along)])
+        for side in _STEERING
+    ]
+    return np.stack(shapes), np.array(_STEERING, dtype=float) * step_m / radius_m
+
+
 def _shot(
-    node: int,
-    poses: list[tuple[float, float, float]],
-    parents: list[int],
-    pieces: list[FloatArray],
+    at: int,
+    nodes: list[_Node],
+    *,
     goals: FloatArray,
-    pushes_on_m: FloatArray,
+    goal_yaw: float,
+    goal_costs: FloatArray,
     router: FieldRouter,
     vehicle: Vehicle,
-) -> tuple[FloatArray, float] | None:
-    """Return the path to ``node``, on by the vehicle's turn to the cheapest goal inside.
+) -> tuple[FloatArray, int] | None:
+    """Return the path to node ``at`` and on by the vehicle's turn to a goal, if inside.
 
-    Also the push-on of that goal [m]; None if no turn from ``node`` stays inside.
+    The goals are tried cheapest first (turn length plus the goal's cost); also returns
+    the goal's index. None if no turn from the node stays inside.
     """
-    x, y, yaw = poses[node]
+    node = nodes[at]
     count = len(goals)
-    turns = vehicle_turns(
-        TurnEnds(
-            np.full(count, x),
-            np.full(count, y),
-            np.full(count, yaw),
-            goals[:, 0],
-            goals[:, 1],
-            goals[:, 2],
-        ),  # fmt: skip
-        vehicle,
-    )
-    order = np.argsort(turns.length_m + PULL_WEIGHT * pushes_on_m, kind="stable")
-    chain: list[FloatArray] = []
-    at = node
-    while at >= 0:
-        chain.append(pieces[at])
-        at = parents[at]
-    driven = np.vstack(chain[::-1])
+    ends = TurnEnds(
+        np.full(count, node.x), np.full(count, node.y), np.full(count, node.yaw),
+        goals[:, 0], goals[:, 1], np.full(count, goal_yaw),
+    )  # fmt: skip
+    turns: TurnCurves
+    if vehicle.can_reverse:
+        turns = vehicle_turns(ends, vehicle)
+    else:
+        # Every Dubins word: near the goal a straight or an S-bend is what fits, where the
+        # vehicle's U-turns between lines would try only loops (its bulbs).
+        turns = dubins_turn(ends, radius_m=turning_radius_m(vehicle))
+    order = np.argsort(turns.length_m + goal_costs, kind="stable")
+    pieces: list[FloatArray] = []
+    back = at
+    while back >= 0:
+        pieces.append(nodes[back].points)
+        back = nodes[back].parent
+    driven = np.vstack(pieces[::-1])
     for g in order.tolist():
         curve = turns.curve(g)
         if len(curve) < 2 or not router.holds_points(curve).all():
             continue
         points = np.vstack([driven, curve[1:]])
         if router.inside_path(points):
-            return points, float(pushes_on_m[g])
+            return points, g
     return None

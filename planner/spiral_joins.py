@@ -3,14 +3,17 @@
 After a full round the vehicle drives on along it until a lane change to the next round (or
 the move to the core's first line) fits inside the field for its body: a forward Dubins
 curve (:func:`planner.turns.dubins_turn`), so the route is one continuous, drivable path.
-Only where no such curve is found does a join take the shortest move inside the field
-(:class:`planner.routing.FieldRouter`), with corners. The rounds and the core are
-:mod:`planner.spiral`'s.
+Where no such curve is found, and between two parts of the core, the join is a chain of the
+vehicle's turns beside the shortest path's corners (:mod:`planner.move_curves`), else its
+arcs searched for (:mod:`planner.move_search`), and only failing both the shortest move
+inside the field (:class:`planner.routing.FieldRouter`), with corners. The rounds and the
+core are :mod:`planner.spiral`'s.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
@@ -100,8 +103,8 @@ class RoundJoiner:
     def add_core(self, core: RouteBuilder, join: tuple[FloatArray, int] | None) -> None:
         """Append the core's route, joined to the round driven last by ``join``.
 
-        ``join``: :meth:`core_join`'s curve and extra points; None for the routed move (with
-        corners) where no curve reaches the core.
+        ``join``: :meth:`core_join`'s curve and extra points; None where no curve reaches
+        the core (:meth:`_fallback_move` joins it).
         """
         if not core.x:
             return
@@ -110,7 +113,7 @@ class RoundJoiner:
         if self.ring is not None:
             first_yaw = _core_pose(core)[1]
             curve, extra = (
-                join if join is not None else (self._routed_from_round(first, first_yaw), 0)
+                join if join is not None else (self._fallback_from_round(first, first_yaw), 0)
             )
             self._leave_round(extra, curve, last_role=core.roles[start])
             self.ring = None
@@ -120,10 +123,13 @@ class RoundJoiner:
             self.route.roles[-1] = core.roles[start]
             self.route.lines[-1] = core.lines[start]
         elif self.route.x:
+            # Between two parts of the core: from where the last one's route ends, heading on.
             here = (self.route.x[-1], self.route.y[-1])
-            before = (self.route.x[-2], self.route.y[-2]) if len(self.route.x) > 1 else here
-            here_yaw = math.atan2(here[1] - before[1], here[0] - before[0])
-            move = self._routed(here, (first[0], first[1]), poses=(here_yaw, _core_pose(core)[1]))
+            core_yaw = _core_pose(core)[1]
+            here_yaw = core_yaw  # a route of one point: the vehicle may face any way there
+            if len(self.route.x) > 1:
+                here_yaw = math.atan2(here[1] - self.route.y[-2], here[0] - self.route.x[-2])
+            move = self._fallback_move(here, (first[0], first[1]), poses=(here_yaw, core_yaw))
             self.route.append("turn", None, move, "turn")
             self.route.roles[-1] = core.roles[start]
             self.route.lines[-1] = core.lines[start]
@@ -279,28 +285,28 @@ class RoundJoiner:
             k = self._best(dep_xy[i], dep_yaw[i], along[i], points[j], ring_yaw[j])
             if k is not None:
                 return self._curve, int(i[k]), int(j[k])
-        # No drivable join found: the shortest move inside the field, with corners.
+        # No Dubins join found: a chain of turns, the arcs searched, or the shortest move.
         target = _nearest(points, self.ring[0]) if self.ring is not None else 0
         assert self.ring is not None
         after = points[(target + 1) % len(points)] - points[target]
         target_yaw = math.atan2(after[1], after[0])
-        return self._routed_from_round(points[target], target_yaw), 0, target
+        return self._fallback_from_round(points[target], target_yaw), 0, target
 
-    def _routed_from_round(self, xy: FloatArray, yaw: float) -> FloatArray:
+    def _fallback_from_round(self, xy: FloatArray, yaw: float) -> FloatArray:
         """Return the move from the current round's entry to pose ``xy``, ``yaw``.
 
-        Where no curve reaches it (:meth:`_routed`).
+        Where no curve reaches it (:meth:`_fallback_move`).
         """
         assert self.ring is not None
         entry = self.ring[0]
         arrival = entry - self.ring[-1]  # the vehicle comes round to its entry
-        return self._routed(
+        return self._fallback_move(
             (float(entry[0]), float(entry[1])),
             (float(xy[0]), float(xy[1])),
             poses=(math.atan2(arrival[1], arrival[0]), yaw),
         )
 
-    def _routed(
+    def _fallback_move(
         self,
         here: tuple[float, float],
         there: tuple[float, float],
@@ -320,13 +326,16 @@ class RoundJoiner:
         if self.vehicle is not None:
             ends = TurnEnds(*(np.array([v]) for v in (*here, poses[0], *there, poses[1])))
             none = np.zeros(1)
+            # At the spiral's own radius (with its slack), as its Dubins joins: rounded on
+            # export, the curve still bends no tighter than the vehicle's radius.
+            vehicle = replace(self.vehicle, min_turn_radius_m=self.radius)
             chained = drivable_moves(
-                ends, back_room_m=none, on_room_m=none, router=self.router, vehicle=self.vehicle
+                ends, back_room_m=none, on_room_m=none, router=self.router, vehicle=vehicle
             ).curves[0]
             if chained is not None and shapely.covers(self.allowed, shapely.LineString(chained)):
                 return chained
             found = search_move(
-                ends, none, none, router=self.router, vehicle=self.vehicle,
+                ends, none, none, router=self.router, vehicle=vehicle,
                 most_expansions=SEARCHED_POSES,
             )  # fmt: skip
             if found is not None and shapely.covers(self.allowed, shapely.LineString(found.points)):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -46,3 +47,14 @@ def test_a_corner_is_sharp() -> None:
     """A right angle on half-metre steps: a corner the vehicle cannot drive."""
     corner = np.array([[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [1.0, 0.5], [1.0, 1.0]])
     assert curvatures(corner).max() > 2.0
+
+
+@pytest.mark.parametrize("tighter", [1.03, 1.05])
+def test_an_arc_a_little_tighter_than_the_radius_is_sharp_on_half_metre_steps(
+    tighter: float,
+) -> None:
+    """The allowance is no bigger than the rounding: on 0.5 m steps, 3 % tighter shows."""
+    radius_m = RADIUS_M / tighter
+    turned = np.arange(10) * 0.5 / radius_m
+    arc = radius_m * np.column_stack([np.cos(turned), np.sin(turned)])
+    assert (curvatures(arc) > 1.0 / RADIUS_M * (1.0 + 1e-6)).all()

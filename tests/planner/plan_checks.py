@@ -10,6 +10,7 @@ import numpy as np
 import shapely
 from shapely import LineString
 
+from bench import move_corners
 from bench.shapes import fixed_heading_figures as fixed_heading_figures
 from planner.projection import field_frame
 from planner.types import CoveragePlan, Vehicle
@@ -170,3 +171,28 @@ def line_to_line_turns(plan: CoveragePlan) -> list[tuple[np.ndarray, bool]]:
             x, y = frame.to_local_xy(*np.asarray(segment.lonlat).T)
             turns.append((np.stack([x, y], axis=1), cell_of(k - 1) == cell_of(k + 1)))
     return turns
+
+
+def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
+    """Every turn between two lines, and its seams with them, is within the turning radius.
+
+    Measured as ``bench.move_corners`` counts: each circle through three consecutive points
+    at the least curvature the exported points' rounding allows
+    (:func:`bench.move_corners.curvatures`), against ``1 / radius`` itself. Each move must
+    leave its line and join the next where they end and start, heading on.
+    """
+    vehicle = plan_vehicle(plan)
+    limit = 1.0 / (vehicle.min_turn_radius_m or vehicle.track_m / 2.0) * (1.0 + 1e-6)
+    frame = field_frame(plan.field_lonlat)
+    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
+    kinds = [s.kind for s in plan.segments]
+    for k in range(1, len(kinds) - 1):
+        if kinds[k] == "turn" and kinds[k - 1] == "line" and kinds[k + 1] == "line":
+            before, turn, after = local[k - 1], local[k], local[k + 1]
+            assert np.allclose(turn[0], before[-1], atol=1e-3)
+            assert np.allclose(turn[-1], after[0], atol=1e-3)
+            back = (before[-1] - before[0]) / np.hypot(*(before[-1] - before[0]))
+            on = (after[-1] - after[0]) / np.hypot(*(after[-1] - after[0]))
+            seam = np.vstack([turn[:1] - 0.5 * back, turn, turn[-1:] + 0.5 * on])
+            kappa = move_corners.curvatures(seam)
+            assert (kappa <= limit).all(), f"turn {k}: curvature {kappa.max():.4f} > {limit:.4f}"

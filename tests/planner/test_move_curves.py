@@ -13,13 +13,16 @@ from shapely import Polygon, box
 
 from planner import PRESETS, plan_coverage
 from planner.move_curves import DrivenMoves, drivable_moves, pull_pairs_m
-from planner.projection import field_frame
 from planner.routing import FieldRouter
 from planner.turns import TurnEnds, vehicle_turns
-from planner.types import CoveragePlan
 from tests.conftest import FIELDS_DIR, field_from_local
 from tests.planner.field_files import shared_feature
-from tests.planner.plan_checks import assert_body_inside, line_to_line_turns, turn_curvatures
+from tests.planner.plan_checks import (
+    assert_body_inside,
+    assert_every_turn_within_the_radius,
+    line_to_line_turns,
+    turn_curvatures,
+)
 
 SMALL = PRESETS["small_tractor"]
 RADIUS_M = SMALL.min_turn_radius_m
@@ -185,22 +188,3 @@ def test_a_line_too_short_for_a_curve_is_dropped_not_cornered(feature_id: str) -
     plan = plan_coverage(field, interval_m=4.0, vehicle="small_tractor")
     assert_body_inside(plan)
     assert_every_turn_within_the_radius(plan)
-
-
-def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
-    """Every turn between two lines is within the radius, and so are its seams with them."""
-    for turn, _ in line_to_line_turns(plan):
-        assert (turn_curvatures(turn) <= KAPPA_MAX).all()
-    # Each move leaves its line and joins the next where they end and start, heading on.
-    frame = field_frame(plan.field_lonlat)
-    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
-    kinds = [s.kind for s in plan.segments]
-    for k in range(1, len(kinds) - 1):
-        if kinds[k] == "turn" and kinds[k - 1] == "line" and kinds[k + 1] == "line":
-            before, turn, after = local[k - 1], local[k], local[k + 1]
-            assert np.allclose(turn[0], before[-1], atol=1e-3)
-            assert np.allclose(turn[-1], after[0], atol=1e-3)
-            back = (before[-1] - before[0]) / np.hypot(*(before[-1] - before[0]))
-            on = (after[-1] - after[0]) / np.hypot(*(after[-1] - after[0]))
-            seam = np.vstack([turn[:1] - 0.5 * back, turn, turn[-1:] + 0.5 * on])
-            assert (turn_curvatures(seam) <= KAPPA_MAX).all()

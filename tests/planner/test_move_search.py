@@ -16,8 +16,7 @@ from planner.routing import FieldRouter
 from planner.turns import STEP_M, TurnEnds
 from tests.conftest import FIELDS_DIR
 from tests.planner.field_files import shared_feature
-from tests.planner.plan_checks import assert_body_inside
-from tests.planner.test_move_curves import assert_every_turn_within_the_radius
+from tests.planner.plan_checks import assert_body_inside, assert_every_turn_within_the_radius
 
 SMALL = PRESETS["small_tractor"]
 RADIUS_M = SMALL.min_turn_radius_m
@@ -74,6 +73,20 @@ def test_a_move_that_must_turn_round_in_a_room_at_the_corridors_end_is_found() -
     assert found is not None
     assert_searched_drivable(found, router, ends, pulls, pushes)
     assert found.points[:, 1].max() > 20.0  # it went round in the room
+
+
+def test_a_goal_just_ahead_in_a_narrow_strip_is_reached_by_a_straight() -> None:
+    """A strip narrower than a turn, the goal a few metres on: the last piece is a straight
+    (a U-turn's loop, all the vehicle's turns between lines would try there, has no room)."""
+    router = FieldRouter(box(0.0, 0.0, 40.0, 4.0))
+    for ahead_m in (4.0, 5.0, 9.0):
+        ends = TurnEnds(*(np.array([v]) for v in (10.0, 2.0, EAST, 10.0 + ahead_m, 2.0, EAST)))
+        none = np.zeros(1)
+
+        found = search_move(ends, none, none, router=router, vehicle=SMALL)
+
+        assert found is not None
+        assert_searched_drivable(found, router, ends, none, none)
 
 
 def test_a_move_with_no_room_to_turn_is_not_found() -> None:
