@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -29,6 +30,7 @@ from bench.bench_fields import DATASETS, INTERVAL_M, load
 from planner import PlannerError, plan_coverage
 from planner.pipeline import LONLAT_DECIMALS
 from planner.projection import field_frame
+from planner.types import CoveragePlan
 
 #: Points this far along the lines on either side are added to each turn [m].
 SEAM_M = 0.5
@@ -92,6 +94,38 @@ def _way(points: np.ndarray, at_end: bool, kind: str) -> np.ndarray | None:
     return step / length_m if length_m > 0.0 else None
 
 
+def turn_seams(
+    plan: CoveragePlan, driven: tuple[str, ...] = ("line",)
+) -> Iterator[tuple[int, np.ndarray]]:
+    """Each turn between two driven segments as the vehicle drives it, local [m].
+
+    Yields the turn's index among ``plan.segments`` and its points with a point
+    :data:`SEAM_M` back along what it leaves and on along what it joins (less if that is
+    shorter), so that a heading that jumps where the turn meets a segment bends the seam.
+
+    Parameters
+    ----------
+    plan : CoveragePlan
+    driven : tuple of str
+        The kinds of segment a turn joins: ``("line",)``, or ``("line", "round")`` for a
+        spiral.
+    """
+    frame = field_frame(plan.field_lonlat)
+    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
+    kinds = [s.kind for s in plan.segments]
+    for k in range(1, len(kinds) - 1):
+        if kinds[k] != "turn" or kinds[k - 1] not in driven or kinds[k + 1] not in driven:
+            continue
+        before, turn, after = local[k - 1], local[k], local[k + 1]
+        back = _way(before, True, kinds[k - 1])
+        on = _way(after, False, kinds[k + 1])
+        if back is None or on is None:
+            continue
+        back_m = min(SEAM_M, float(np.hypot(*(before[-1] - before[0]))))
+        on_m = min(SEAM_M, float(np.hypot(*(after[-1] - after[0]))))
+        yield k, np.vstack([turn[:1] - back * back_m, turn, turn[-1:] + on * on_m])
+
+
 def sharp_turns(field: object, vehicle: str, pattern: str = "boustrophedon") -> tuple[int, int]:
     """Plan ``field``; return its turns between driven segments and how many are sharp.
 
@@ -105,22 +139,8 @@ def sharp_turns(field: object, vehicle: str, pattern: str = "boustrophedon") -> 
     )
     assert plan.vehicle is not None
     radius = plan.vehicle.min_turn_radius_m or plan.vehicle.track_m / 2.0
-    frame = field_frame(plan.field_lonlat)
-    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
-    kinds = [s.kind for s in plan.segments]
-    driven = _DRIVEN[pattern]
     turns = sharp = 0
-    for k in range(1, len(kinds) - 1):
-        if kinds[k] != "turn" or kinds[k - 1] not in driven or kinds[k + 1] not in driven:
-            continue
-        before, turn, after = local[k - 1], local[k], local[k + 1]
-        back = _way(before, True, kinds[k - 1])
-        on = _way(after, False, kinds[k + 1])
-        if back is None or on is None:
-            continue
-        back_m = min(SEAM_M, float(np.hypot(*(before[-1] - before[0]))))
-        on_m = min(SEAM_M, float(np.hypot(*(after[-1] - after[0]))))
-        seam = np.vstack([turn[:1] - back * back_m, turn, turn[-1:] + on * on_m])
+    for _, seam in turn_seams(plan, _DRIVEN[pattern]):
         turns += 1
         sharp += bool((curvatures(seam) > 1.0 / radius * (1.0 + 1e-6)).any())
     return turns, sharp

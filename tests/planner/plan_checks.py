@@ -178,21 +178,20 @@ def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
 
     Measured as ``bench.move_corners`` counts: each circle through three consecutive points
     at the least curvature the exported points' rounding allows
-    (:func:`bench.move_corners.curvatures`), against ``1 / radius`` itself. Each move must
+    (:func:`bench.move_corners.curvatures`), against ``1 / radius`` itself, with half a
+    metre of the lines on either side (:func:`bench.move_corners.turn_seams`): each move must
     leave its line and join the next where they end and start, heading on.
     """
     vehicle = plan_vehicle(plan)
     limit = 1.0 / (vehicle.min_turn_radius_m or vehicle.track_m / 2.0) * (1.0 + 1e-6)
-    frame = field_frame(plan.field_lonlat)
-    local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
+    for a, b in zip(plan.segments[:-1], plan.segments[1:], strict=True):
+        assert a.lonlat[-1] == b.lonlat[0], "the path is not continuous"
     kinds = [s.kind for s in plan.segments]
-    for k in range(1, len(kinds) - 1):
-        if kinds[k] == "turn" and kinds[k - 1] == "line" and kinds[k + 1] == "line":
-            before, turn, after = local[k - 1], local[k], local[k + 1]
-            assert np.allclose(turn[0], before[-1], atol=1e-3)
-            assert np.allclose(turn[-1], after[0], atol=1e-3)
-            back = (before[-1] - before[0]) / np.hypot(*(before[-1] - before[0]))
-            on = (after[-1] - after[0]) / np.hypot(*(after[-1] - after[0]))
-            seam = np.vstack([turn[:1] - 0.5 * back, turn, turn[-1:] + 0.5 * on])
-            kappa = move_corners.curvatures(seam)
-            assert (kappa <= limit).all(), f"turn {k}: curvature {kappa.max():.4f} > {limit:.4f}"
+    between_lines = [
+        k for k in range(1, len(kinds) - 1) if kinds[k - 1 : k + 2] == ["line", "turn", "line"]
+    ]
+    seams = dict(move_corners.turn_seams(plan))
+    assert sorted(seams) == between_lines, "a turn joins a line with no length"
+    for k, seam in seams.items():
+        kappa = move_corners.curvatures(seam)
+        assert (kappa <= limit).all(), f"turn {k}: curvature {kappa.max():.4f} > {limit:.4f}"

@@ -228,18 +228,8 @@ def test_a_join_between_parts_of_the_core_is_a_curve_on_a_real_field() -> None:
     plan = plan_coverage(field, interval_m=4.0, pattern="spiral", vehicle="small_tractor")
     assert_spiral_drivable(plan)
     limit = 1.0 / PRESETS["small_tractor"].min_turn_radius_m * (1.0 + 1e-6)
-    segments = driven(plan)
-    for k, (kind, xy, _) in enumerate(segments):
-        if kind != "turn":
-            continue
-        pieces = [xy]
-        if k > 0 and len(segments[k - 1][1]) > 1:
-            tail = segments[k - 1][1][-2:]
-            way = (tail[1] - tail[0]) / np.hypot(*(tail[1] - tail[0]))
-            pieces.insert(0, xy[:1] - 0.5 * way)
-        if k + 1 < len(segments) and len(segments[k + 1][1]) > 1:
-            head = segments[k + 1][1][:2]
-            way = (head[1] - head[0]) / np.hypot(*(head[1] - head[0]))
-            pieces.append(xy[-1:] + 0.5 * way)
-        kappa = move_corners.curvatures(np.vstack(pieces))
+    seams = list(move_corners.turn_seams(plan, ("line", "round")))
+    assert seams
+    for k, seam in seams:
+        kappa = move_corners.curvatures(seam)
         assert (kappa <= limit).all(), f"turn {k}: curvature {kappa.max():.4f}"
