@@ -2,8 +2,9 @@
 
 Every move between cells is the vehicle's own turn if it stays in the machine area; else,
 for a vehicle with a turning radius, a curve for which the lines it joins give up some
-length (:mod:`planner.move_curves`), or, failing that, for which up to three lines at
-either end of the move are dropped (:class:`_LineDrops`), or, as a last resort, a path of
+length (:mod:`planner.move_curves`), or, failing that, for which the slivers it leaves or
+joins (cells of one line shorter than the radius) or up to three lines at either end of
+the move are dropped (:class:`_LineDrops`), or, as a last resort, a path of
 the vehicle's arcs searched for (:mod:`planner.move_search`); and otherwise the shortest
 path inside the field (:mod:`planner.routing`), with corners.
 """
@@ -61,7 +62,8 @@ def drive_cells(
     line's start of the next (:func:`moves_between_cells`), and may shorten each of the two
     lines by less than half, keeping :data:`_KEPT_LINE_M` of it (a cell of one line gives up
     length at both ends). Where a vehicle with a turning radius finds no curve for a move,
-    up to three lines at its ends may go instead, whole cells too (:class:`_LineDrops`);
+    the slivers it leaves or joins go (:meth:`_LineDrops.drop_slivers`), then up to three
+    lines at its ends, whole cells too (:meth:`_LineDrops.drop_for_curves`);
     a move no drop serves is searched for (:meth:`_LineDrops.search_cornered`).
     """
     driven = [fit for fit in fitted if len(fit.u)]
@@ -69,6 +71,7 @@ def drive_cells(
         return DrivenCells(list(fitted), [])
     drops = _LineDrops(plan.heading_deg, driven, router, vehicle)
     if vehicle.min_turn_radius_m > 0.0:
+        drops.drop_slivers()
         drops.drop_for_curves()
         drops.search_cornered()
     kept, moves = drops.result()
@@ -186,6 +189,41 @@ class _LineDrops:
         new_moves = [key for key in self._keys(first, last) if key not in now]
         touched = changed | {key[0] for key in new_moves} | {key[1] for key in new_moves}
         return _Drops(length_m, first, last, touched, new_moves)
+
+    def drop_slivers(self) -> None:
+        """Drop the slivers that moves with corners leave or join, until none does.
+
+        A sliver is a cell left with one line shorter than the turning radius: a stub in a
+        pocket of the boundary, often one of a row of them along a scalloped edge (a
+        spiral's core inside rounds that loop round a wavy bund). Driving it takes a loop of
+        half a turning circle or more for less than a radius of line, and a move from one
+        stub of a row to the next has no curve whatever up to :data:`MOST_DROPPED` lines
+        :meth:`drop_for_curves` drops; it would try every split of the row in turn, each
+        move routed anew along the scallops. Dropping such slivers together first leaves
+        moves between real lines. A plan keeps a cell.
+        """
+        limit_m = turning_radius_m(self.vehicle)
+        while True:
+            now = self._keys(self.first_dropped, self.last_dropped)
+            slivers = {
+                c
+                for key in now
+                if not self.planned[key].curved
+                for c in key[:2]
+                if self._is_sliver(c, limit_m)
+            }
+            alive = self._alive(self.first_dropped, self.last_dropped)
+            if not slivers or len(slivers) >= len(alive):
+                return
+            for c in slivers:
+                self.first_dropped[c] = len(self.line_m[c]) - self.last_dropped[c]
+            self._plan(self._keys(self.first_dropped, self.last_dropped))
+
+    def _is_sliver(self, cell: int, limit_m: float) -> bool:
+        """Whether ``cell`` has one line left, shorter than ``limit_m``."""
+        first, last = self.first_dropped[cell], self.last_dropped[cell]
+        left = len(self.line_m[cell]) - first - last
+        return left == 1 and float(self.line_m[cell][first]) < limit_m
 
     def drop_for_curves(self) -> None:
         """Drop lines where that turns a move with corners into curves.
