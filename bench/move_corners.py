@@ -6,7 +6,8 @@ real field of :mod:`bench.bench_fields` at its 4 m interval (VEHICLE defaults to
 turn between two lines (with ``--pattern spiral``, rounds too) as the vehicle would drive
 it (a vehicle with a turning radius: one that pivots drives a corner on the spot): the
 turn's points with a point half a metre back along what it leaves and half a metre on
-along what it joins, so that a heading that jumps where the turn meets a line counts too. A turn is
+along what it joins (along a shorter line, its length; :func:`turn_seams`), so that a
+heading that jumps where the turn meets a line counts too. A turn is
 *sharp* where the circle through three consecutive points is tighter than the turning
 radius even at the least the exported points allow: they are rounded to 1e-9°, which on
 steps of a few centimetres can tighten a circle by a tenth (:func:`curvatures`). Turns
@@ -99,20 +100,35 @@ def turn_seams(
 ) -> Iterator[tuple[int, np.ndarray]]:
     """Each turn between two driven segments as the vehicle drives it, local [m].
 
-    Yields the turn's index among ``plan.segments`` and its points with a point
-    :data:`SEAM_M` back along what it leaves and on along what it joins (less if that is
-    shorter), so that a heading that jumps where the turn meets a segment bends the seam.
+    The turn's points get a point :data:`SEAM_M` back along what it leaves and one on
+    along what it joins (along a line, at most its length), so that a heading that jumps
+    where the turn meets a segment bends the seam. A round's direction is its last (or
+    first) step's: a round driven once round ends where it starts.
 
     Parameters
     ----------
     plan : CoveragePlan
+        A plan, its segments in driving order.
     driven : tuple of str
         The kinds of segment a turn joins: ``("line",)``, or ``("line", "round")`` for a
         spiral.
+
+    Yields
+    ------
+    index : int
+        The turn's index among ``plan.segments``.
+    seam : ndarray, shape (k + 2, 2)
+        Its ``k`` points with the two added, local [m].
     """
     frame = field_frame(plan.field_lonlat)
     local = [np.stack(frame.to_local_xy(*np.asarray(s.lonlat).T), axis=1) for s in plan.segments]
     kinds = [s.kind for s in plan.segments]
+
+    def reach_m(points: np.ndarray, kind: str) -> float:
+        if kind != "line":
+            return SEAM_M
+        return min(SEAM_M, float(np.hypot(*(points[-1] - points[0]))))
+
     for k in range(1, len(kinds) - 1):
         if kinds[k] != "turn" or kinds[k - 1] not in driven or kinds[k + 1] not in driven:
             continue
@@ -121,8 +137,7 @@ def turn_seams(
         on = _way(after, False, kinds[k + 1])
         if back is None or on is None:
             continue
-        back_m = min(SEAM_M, float(np.hypot(*(before[-1] - before[0]))))
-        on_m = min(SEAM_M, float(np.hypot(*(after[-1] - after[0]))))
+        back_m, on_m = reach_m(before, kinds[k - 1]), reach_m(after, kinds[k + 1])
         yield k, np.vstack([turn[:1] - back * back_m, turn, turn[-1:] + on * on_m])
 
 

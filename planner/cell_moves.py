@@ -191,36 +191,40 @@ class _LineDrops:
         return _Drops(length_m, first, last, touched, new_moves)
 
     def drop_slivers(self) -> None:
-        """Drop the slivers that moves with corners leave or join, until none does.
+        """Drop the slivers that moves with corners leave or join, while that helps.
 
         A sliver is a cell left with one line shorter than the turning radius: a stub in a
         pocket of the boundary, often one of a row of them along a scalloped edge (a
         spiral's core inside rounds that loop round a wavy bund). Driving it takes a loop of
-        half a turning circle or more for less than a radius of line, and a move from one
-        stub of a row to the next has no curve whatever up to :data:`MOST_DROPPED` lines
-        :meth:`drop_for_curves` drops; it would try every split of the row in turn, each
-        move routed anew along the scallops. Dropping such slivers together first leaves
-        moves between real lines. A plan keeps a cell.
+        half a turning circle or more for less than a radius of line. Between two stubs of
+        a row no move has a curve, and dropping up to :data:`MOST_DROPPED` lines at a time
+        (:meth:`drop_for_curves`) leaves a stub at one end or the other: it would try every
+        split of the row in turn, each move routed anew along the scallops. So every sliver
+        that a move with corners leaves or joins goes at once, and again for the moves then
+        planned, as long as each round leaves fewer moves with corners than before (else
+        the round is undone and the drops stop: a move may have corners for the other cell's
+        sake, and its sliver would go for nothing). A round that would drop every cell left
+        is not made.
         """
         limit_m = turning_radius_m(self.vehicle)
         while True:
             now = self._keys(self.first_dropped, self.last_dropped)
-            slivers = {
-                c
-                for key in now
-                if not self.planned[key].curved
-                for c in key[:2]
-                if self._is_sliver(c, limit_m)
-            }
+            cornered = [key for key in now if not self.planned[key].curved]
+            slivers = {c for key in cornered for c in key[:2] if self._is_sliver(c, limit_m)}
             alive = self._alive(self.first_dropped, self.last_dropped)
             if not slivers or len(slivers) >= len(alive):
                 return
+            kept = list(self.first_dropped)
             for c in slivers:
                 self.first_dropped[c] = len(self.line_m[c]) - self.last_dropped[c]
-            self._plan(self._keys(self.first_dropped, self.last_dropped))
+            after = self._keys(self.first_dropped, self.last_dropped)
+            self._plan(after)
+            if sum(not self.planned[key].curved for key in after) >= len(cornered):
+                self.first_dropped = kept
+                return
 
     def _is_sliver(self, cell: int, limit_m: float) -> bool:
-        """Whether ``cell`` has one line left, shorter than ``limit_m``."""
+        """Whether ``cell`` has one line left, shorter than ``limit_m`` [m]."""
         first, last = self.first_dropped[cell], self.last_dropped[cell]
         left = len(self.line_m[cell]) - first - last
         return left == 1 and float(self.line_m[cell][first]) < limit_m

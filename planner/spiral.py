@@ -72,6 +72,8 @@ CORE_SIMPLE_VERTICES = 400
 CORE_COARSE_TOLERANCE_M = 0.05
 #: The share of a core's area the coarse simplification may give up.
 CORE_COARSE_SHARE = 0.001
+#: ... and the longest piece of the body's room it may take, beyond its own strip [m].
+_LOST_ROOM_M = 1.0
 #: Room the body keeps from the boundary in the joins' check, inside R1's 1 cm [m].
 _BODY_MARGIN_M = 0.002
 #: Where no curve reaches the core's start, it is planned from this many other points of
@@ -302,26 +304,50 @@ def _simplified_core(part: Polygon, half_width_m: float) -> list[Polygon]:
     The core's boundary follows the rounds' arcs, a vertex every few centimetres, and the
     router between its cells grows with the square of its corners (4 of a 21 ha field's
     5 s). Shrunk by the tolerance and simplified by as much, it stays inside ``part``
-    (the core lies half an interval inside the last round). The tolerance is
-    :data:`CORE_COARSE_TOLERANCE_M` where that gives up at most :data:`CORE_COARSE_SHARE`
-    of the part's area (a large core: south_africa_2017-52's 34 ha core keeps 2,436 of its
-    25,159 vertices, 12,597 at 2 mm, and gives up 0.06 %; with the slivers dropped first,
-    :meth:`planner.cell_moves._LineDrops.drop_slivers`, its spiral takes 23 s, not 455 s), else
-    :data:`CORE_TOLERANCE_M`. Where that would part it, or leave a piece too narrow for the
-    body that was not, ``part`` is kept as it is; so is a part of at most
-    :data:`CORE_SIMPLE_VERTICES` vertices, which routes fast as it is (on a strip the body
-    barely fits, 2 mm off each side would cost coverage: 0.5 pp of a 0.86 m strip).
+    (the core lies half an interval inside the last round). A large core is simplified by
+    :data:`CORE_COARSE_TOLERANCE_M` (:func:`_coarse_core`); else, and where that would
+    change where the body can go, by :data:`CORE_TOLERANCE_M`. Where that would part it,
+    or leave a piece too narrow for the body that was not, ``part`` is kept as it is; so
+    is a part of at most :data:`CORE_SIMPLE_VERTICES` vertices, which routes fast as it is
+    (on a strip the body barely fits, 2 mm off each side would cost coverage: 0.5 pp of a
+    0.86 m strip).
     """
     if shapely.get_num_coordinates(part) <= CORE_SIMPLE_VERTICES:
         return [part]
-    for tolerance_m in (CORE_COARSE_TOLERANCE_M, CORE_TOLERANCE_M):
-        shrunk = polygon_parts(part.buffer(-tolerance_m, join_style="mitre").simplify(tolerance_m))
-        if len(shrunk) != 1 or shrunk[0].buffer(-half_width_m).is_empty:
-            continue
-        given_up_m2 = float(part.area) - float(shrunk[0].area)
-        if tolerance_m == CORE_TOLERANCE_M or given_up_m2 <= CORE_COARSE_SHARE * part.area:
-            return shrunk
+    coarse = _coarse_core(part, half_width_m)
+    if coarse is not None:
+        return [coarse]
+    shrunk = polygon_parts(
+        part.buffer(-CORE_TOLERANCE_M, join_style="mitre").simplify(CORE_TOLERANCE_M)
+    )
+    if len(shrunk) == 1 and not shrunk[0].buffer(-half_width_m).is_empty:
+        return shrunk
     return [part]
+
+
+def _coarse_core(part: Polygon, half_width_m: float) -> Polygon | None:
+    """Return ``part`` shrunk and simplified by :data:`CORE_COARSE_TOLERANCE_M`, if that holds.
+
+    It holds where the part stays one piece, gives up at most :data:`CORE_COARSE_SHARE`
+    of its area, and leaves the body (``half_width_m`` [m] in from the boundary) room
+    wherever it had room before, but within twice the tolerance of its edge: an arm of
+    the core just wider than the body would lose its line, not a strip of 5 cm. That is
+    tested on the room lost beyond twice the tolerance: no piece of it may be longer than
+    :data:`_LOST_ROOM_M`. None where it does not hold.
+    """
+    tolerance_m = CORE_COARSE_TOLERANCE_M
+    shrunk = polygon_parts(part.buffer(-tolerance_m, join_style="mitre").simplify(tolerance_m))
+    if len(shrunk) != 1 or float(part.area) - float(shrunk[0].area) > (
+        CORE_COARSE_SHARE * part.area
+    ):
+        return None
+    room_before = part.buffer(-half_width_m)
+    # The boundary moved in by up to twice the tolerance (the shrink, then the simplify).
+    room_after = shrunk[0].buffer(-half_width_m).buffer(2.0 * tolerance_m, join_style="mitre")
+    lost = shapely.get_parts(room_before.difference(room_after))
+    if any(piece.length / 2.0 > _LOST_ROOM_M for piece in lost):
+        return None
+    return shrunk[0]
 
 
 def _round_levels(

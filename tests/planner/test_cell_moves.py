@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import shapely
 from hypothesis import given
 from hypothesis import strategies as st
 
-from planner.cell_moves import _LineDrops, _without_lines
+from bench.move_corners import curvatures
+from planner.cell_moves import _LineDrops, _without_lines, drive_cells
 from planner.line_ends import FittedLines
 from planner.routing import FieldRouter
 from planner.turns import TurnCurves
@@ -127,3 +130,46 @@ def test_a_stub_longer_than_the_radius_and_a_stub_joined_by_curves_stay() -> Non
     assert [drops.planned[key].curved for key in keys] == [True, True, True, False]
     drops.drop_slivers()
     assert drops._alive(drops.first_dropped, drops.last_dropped) == [0, 1, 2, 3, 4]
+
+
+def test_a_sliver_whose_move_has_corners_for_the_other_cells_sake_stays() -> None:
+    # A 10 m line up a corridor 1.6 m wide: no curve leaves it, whatever follows. Dropping
+    # the stub after it (which a curve leaves) would leave the move from it with corners.
+    field = FieldRouter(
+        shapely.union_all([shapely.box(0, 0, 48, 30), shapely.box(1.2, 29.9, 2.8, 44.0)])
+    )
+    cells = [
+        lines_of([2.0], 31.0, 41.0),
+        lines_of([18.0], 21.4, 22.0),
+        lines_of([22.0, 26.0], 29.0, 1.0),
+    ]
+    drops = _LineDrops(0.0, cells, field, SMALL)
+    keys = drops._keys(drops.first_dropped, drops.last_dropped)
+    assert [drops.planned[key].curved for key in keys] == [False, True]
+    drops.drop_slivers()
+    assert drops._alive(drops.first_dropped, drops.last_dropped) == [0, 1, 2]
+
+
+def test_a_plan_of_slivers_only_keeps_them() -> None:
+    pockets = [18.0, 22.0, 26.0]
+    cells = [lines_of([u], 30.2, 30.8) for u in pockets]
+    drops = _LineDrops(0.0, cells, scalloped(pockets), SMALL)
+    drops.drop_slivers()
+    assert drops._alive(drops.first_dropped, drops.last_dropped) == [0, 1, 2]
+
+
+def test_driving_cells_drops_a_row_of_stubs_by_itself(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The drops of up to three lines (switched off here) clear this short row too; on a
+    # real scalloped core they left 66 moves with corners (docs/vehicles.md).
+    monkeypatch.setattr(_LineDrops, "drop_for_curves", lambda self: None)
+    pockets = [18.0, 22.0, 26.0, 30.0]
+    cells = [
+        lines_of([2.0, 6.0, 10.0, 14.0], 1.0, 29.0),
+        *(lines_of([u], 30.2, 30.8) for u in pockets),
+        lines_of([34.0, 38.0, 42.0, 46.0], 29.0, 1.0),
+    ]
+    plan = SimpleNamespace(heading_deg=0.0)  # drive_cells reads the heading only
+    driven = drive_cells(plan, cells, scalloped(pockets), vehicle=SMALL)  # type: ignore[arg-type]
+    assert [len(fit.u) for fit in driven.fitted] == [4, 0, 0, 0, 0, 4]
+    (move,) = driven.moves
+    assert (curvatures(move, rounding_m=0.0) <= 1.0 / 3.0 * (1.0 + 1e-6)).all()

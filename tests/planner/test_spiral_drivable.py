@@ -229,7 +229,8 @@ def test_a_join_between_parts_of_the_core_is_a_curve_on_a_real_field() -> None:
     assert_spiral_drivable(plan)
     limit = 1.0 / PRESETS["small_tractor"].min_turn_radius_m * (1.0 + 1e-6)
     seams = list(move_corners.turn_seams(plan, ("line", "round")))
-    assert seams
+    # Every turn has a seam: it leaves and joins a line or a round, each with a direction.
+    assert len(seams) == sum(s.kind == "turn" for s in plan.segments) > 0
     for k, seam in seams:
         kappa = move_corners.curvatures(seam)
         assert (kappa <= limit).all(), f"turn {k}: curvature {kappa.max():.4f}"
