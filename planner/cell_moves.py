@@ -3,8 +3,9 @@
 Every move between cells is the vehicle's own turn if it stays in the machine area; else,
 for a vehicle with a turning radius, a curve for which the lines it joins give up some
 length (:mod:`planner.move_curves`), or, failing that, for which the slivers it leaves or
-joins (cells of one line shorter than the radius) or up to three lines at either end of
-the move are dropped (:class:`_LineDrops`), or, as a last resort, a path of
+joins (cells of one line shorter than the radius, where that leaves fewer moves with
+corners) or up to three lines at either end of the move are dropped
+(:class:`_LineDrops`), or, as a last resort, a path of
 the vehicle's arcs searched for (:mod:`planner.move_search`); and otherwise the shortest
 path inside the field (:mod:`planner.routing`), with corners.
 """
@@ -62,7 +63,8 @@ def drive_cells(
     line's start of the next (:func:`moves_between_cells`), and may shorten each of the two
     lines by less than half, keeping :data:`_KEPT_LINE_M` of it (a cell of one line gives up
     length at both ends). Where a vehicle with a turning radius finds no curve for a move,
-    the slivers it leaves or joins go (:meth:`_LineDrops.drop_slivers`), then up to three
+    the slivers it leaves or joins go where that leaves fewer moves with corners
+    (:meth:`_LineDrops.drop_slivers`), then up to three
     lines at its ends, whole cells too (:meth:`_LineDrops.drop_for_curves`);
     a move no drop serves is searched for (:meth:`_LineDrops.search_cornered`).
     """
@@ -204,7 +206,10 @@ class _LineDrops:
         planned, as long as each round leaves fewer moves with corners than before (else
         the round is undone and the drops stop: a move may have corners for the other cell's
         sake, and its sliver would go for nothing). A round that would drop every cell left
-        is not made.
+        is not made. The test is on the round's total: a sliver between two moves that
+        have corners for their other cells' sake goes too (two moves with corners become
+        one), and a round that clears a row keeps whatever else it dropped; judging each
+        run of slivers by the move that replaces it would be stricter.
         """
         limit_m = turning_radius_m(self.vehicle)
         while True:
@@ -214,13 +219,13 @@ class _LineDrops:
             alive = self._alive(self.first_dropped, self.last_dropped)
             if not slivers or len(slivers) >= len(alive):
                 return
-            kept = list(self.first_dropped)
+            before = list(self.first_dropped)
             for c in slivers:
                 self.first_dropped[c] = len(self.line_m[c]) - self.last_dropped[c]
             after = self._keys(self.first_dropped, self.last_dropped)
             self._plan(after)
             if sum(not self.planned[key].curved for key in after) >= len(cornered):
-                self.first_dropped = kept
+                self.first_dropped = before
                 return
 
     def _is_sliver(self, cell: int, limit_m: float) -> bool:

@@ -72,7 +72,8 @@ CORE_SIMPLE_VERTICES = 400
 CORE_COARSE_TOLERANCE_M = 0.05
 #: The share of a core's area the coarse simplification may give up.
 CORE_COARSE_SHARE = 0.001
-#: ... and the longest piece of the body's room it may take, beyond its own strip [m].
+#: ... and the longest piece of the body's room it may take beyond its own strip, as half
+#: the piece's perimeter [m].
 _LOST_ROOM_M = 1.0
 #: Room the body keeps from the boundary in the joins' check, inside R1's 1 cm [m].
 _BODY_MARGIN_M = 0.002
@@ -304,9 +305,9 @@ def _simplified_core(part: Polygon, half_width_m: float) -> list[Polygon]:
     The core's boundary follows the rounds' arcs, a vertex every few centimetres, and the
     router between its cells grows with the square of its corners (4 of a 21 ha field's
     5 s). Shrunk by the tolerance and simplified by as much, it stays inside ``part``
-    (the core lies half an interval inside the last round). A large core is simplified by
-    :data:`CORE_COARSE_TOLERANCE_M` (:func:`_coarse_core`); else, and where that would
-    change where the body can go, by :data:`CORE_TOLERANCE_M`. Where that would part it,
+    (the core lies half an interval inside the last round). It is simplified by
+    :data:`CORE_COARSE_TOLERANCE_M` where that costs little (:func:`_coarse_core`: a
+    large core), else by :data:`CORE_TOLERANCE_M`. Where that would part it,
     or leave a piece too narrow for the body that was not, ``part`` is kept as it is; so
     is a part of at most :data:`CORE_SIMPLE_VERTICES` vertices, which routes fast as it is
     (on a strip the body barely fits, 2 mm off each side would cost coverage: 0.5 pp of a
@@ -329,11 +330,11 @@ def _coarse_core(part: Polygon, half_width_m: float) -> Polygon | None:
     """Return ``part`` shrunk and simplified by :data:`CORE_COARSE_TOLERANCE_M`, if that holds.
 
     It holds where the part stays one piece, gives up at most :data:`CORE_COARSE_SHARE`
-    of its area, and leaves the body (``half_width_m`` [m] in from the boundary) room
-    wherever it had room before, but within twice the tolerance of its edge: an arm of
-    the core just wider than the body would lose its line, not a strip of 5 cm. That is
-    tested on the room lost beyond twice the tolerance: no piece of it may be longer than
-    :data:`_LOST_ROOM_M`. None where it does not hold.
+    of its area, and takes from the body's room (``half_width_m`` [m] in from the
+    boundary) no piece longer than :data:`_LOST_ROOM_M` (half its perimeter) beyond twice
+    the tolerance of the room left: an arm of the core just wider than the body would
+    lose its line, not a strip of 5 cm. A shorter neck may still go, and part the body's
+    room in two while the core stays whole. None where it does not hold.
     """
     tolerance_m = CORE_COARSE_TOLERANCE_M
     shrunk = polygon_parts(part.buffer(-tolerance_m, join_style="mitre").simplify(tolerance_m))
@@ -342,7 +343,8 @@ def _coarse_core(part: Polygon, half_width_m: float) -> Polygon | None:
     ):
         return None
     room_before = part.buffer(-half_width_m)
-    # The boundary moved in by up to twice the tolerance (the shrink, then the simplify).
+    # The boundary moved in by up to twice the tolerance (the shrink, then the simplify;
+    # more at a sharp inner corner, which can only make the test reject more).
     room_after = shrunk[0].buffer(-half_width_m).buffer(2.0 * tolerance_m, join_style="mitre")
     lost = shapely.get_parts(room_before.difference(room_after))
     if any(piece.length / 2.0 > _LOST_ROOM_M for piece in lost):

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bench.move_corners import ROUNDING_M, curvatures
+from bench.move_corners import ROUNDING_M, SEAM_M, curvatures, turn_seams
+from planner.projection import field_frame
 
 RADIUS_M = 3.0
 
@@ -58,3 +61,26 @@ def test_an_arc_a_little_tighter_than_the_radius_is_sharp_on_half_metre_steps(
     turned = np.arange(10) * 0.5 / radius_m
     arc = radius_m * np.column_stack([np.cos(turned), np.sin(turned)])
     assert (curvatures(arc) > 1.0 / RADIUS_M * (1.0 + 1e-6)).all()
+
+
+def test_a_seam_reaches_half_a_metre_along_a_round_driven_once_round() -> None:
+    """A round driven once round ends where it starts: its seam with the turn after it
+    still reaches half a metre back along its last step (not its start-to-end length, 0)."""
+    field_lonlat = shapely.box(115.20, -8.61, 115.21, -8.60)
+    frame = field_frame(field_lonlat)
+    ring = np.array([(0, 0), (10, 0), (10, 10), (0, 10), (0, 5), (0, 1), (0, 0)], dtype=float)
+    turn = np.array([(0, 0), (0.2, -1.0), (1.0, -2.0), (2.0, -2.5)])
+    line = np.array([(2.0, -2.5), (9.0, -2.5)])
+
+    def segment(kind: str, xy: np.ndarray) -> SimpleNamespace:
+        lon, lat = frame.to_lonlat_xy(*xy.T)
+        return SimpleNamespace(kind=kind, lonlat=np.column_stack([lon, lat]).tolist())
+
+    plan = SimpleNamespace(
+        field_lonlat=field_lonlat,
+        segments=[segment("round", ring), segment("turn", turn), segment("line", line)],
+    )
+    ((k, seam),) = turn_seams(plan, ("line", "round"))  # type: ignore[arg-type]
+    assert k == 1
+    assert np.allclose(seam[0], (0.0, SEAM_M), atol=1e-6)
+    assert np.allclose(seam[-1], (2.0 + SEAM_M, -2.5), atol=1e-6)
