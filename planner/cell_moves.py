@@ -214,7 +214,7 @@ class _LineDrops:
         limit_m = turning_radius_m(self.vehicle)
         while True:
             now = self._keys(self.first_dropped, self.last_dropped)
-            cornered = [key for key in now if not self.planned[key].curved]
+            cornered = self._cornered(now)
             slivers = {c for key in cornered for c in key[:2] if self._is_sliver(c, limit_m)}
             alive = self._alive(self.first_dropped, self.last_dropped)
             if not slivers or len(slivers) >= len(alive):
@@ -224,9 +224,13 @@ class _LineDrops:
                 self.first_dropped[c] = len(self.line_m[c]) - self.last_dropped[c]
             after = self._keys(self.first_dropped, self.last_dropped)
             self._plan(after)
-            if sum(not self.planned[key].curved for key in after) >= len(cornered):
+            if len(self._cornered(after)) >= len(cornered):
                 self.first_dropped = before
                 return
+
+    def _cornered(self, keys: list[_MoveKey]) -> list[_MoveKey]:
+        """Return the moves of ``keys`` (planned) that have corners."""
+        return [key for key in keys if not self.planned[key].curved]
 
     def _is_sliver(self, cell: int, limit_m: float) -> bool:
         """Whether ``cell`` has one line left, shorter than ``limit_m`` [m]."""
@@ -280,7 +284,7 @@ class _LineDrops:
     def _drop_round(self, count: int) -> bool:
         """One round of :meth:`drop_for_curves` at ``count`` lines; whether it dropped any."""
         now = self._keys(self.first_dropped, self.last_dropped)
-        cornered = [key for key in now if not self.planned[key].curved]
+        cornered = self._cornered(now)
         current = set(now)
         options: list[list[_Drops]] = []
         for move in cornered:

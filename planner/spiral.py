@@ -318,9 +318,7 @@ def _simplified_core(part: Polygon, half_width_m: float) -> list[Polygon]:
     coarse = _coarse_core(part, half_width_m)
     if coarse is not None:
         return [coarse]
-    shrunk = polygon_parts(
-        part.buffer(-CORE_TOLERANCE_M, join_style="mitre").simplify(CORE_TOLERANCE_M)
-    )
+    shrunk = _shrunk(part, CORE_TOLERANCE_M)
     if len(shrunk) == 1 and not shrunk[0].buffer(-half_width_m).is_empty:
         return shrunk
     return [part]
@@ -337,7 +335,7 @@ def _coarse_core(part: Polygon, half_width_m: float) -> Polygon | None:
     room in two while the core stays whole. None where it does not hold.
     """
     tolerance_m = CORE_COARSE_TOLERANCE_M
-    shrunk = polygon_parts(part.buffer(-tolerance_m, join_style="mitre").simplify(tolerance_m))
+    shrunk = _shrunk(part, tolerance_m)
     if len(shrunk) != 1 or float(part.area) - float(shrunk[0].area) > (
         CORE_COARSE_SHARE * part.area
     ):
@@ -350,6 +348,11 @@ def _coarse_core(part: Polygon, half_width_m: float) -> Polygon | None:
     if any(piece.length / 2.0 > _LOST_ROOM_M for piece in lost):
         return None
     return shrunk[0]
+
+
+def _shrunk(part: Polygon, tolerance_m: float) -> list[Polygon]:
+    """Return ``part`` shrunk by ``tolerance_m`` [m] and simplified by as much, in parts."""
+    return polygon_parts(part.buffer(-tolerance_m, join_style="mitre").simplify(tolerance_m))
 
 
 def _round_levels(

@@ -173,6 +173,12 @@ def line_to_line_turns(plan: CoveragePlan) -> list[tuple[np.ndarray, bool]]:
     return turns
 
 
+def assert_continuous(plan: CoveragePlan) -> None:
+    """Each segment begins where the one before it ends (the same waypoint, to the bit)."""
+    for before, after in zip(plan.segments[:-1], plan.segments[1:], strict=True):
+        assert before.lonlat[-1] == after.lonlat[0], "the path is not continuous"
+
+
 def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
     """Every turn between two lines, and its seams with them, is within the turning radius.
 
@@ -184,8 +190,7 @@ def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
     """
     vehicle = plan_vehicle(plan)
     limit = 1.0 / (vehicle.min_turn_radius_m or vehicle.track_m / 2.0) * (1.0 + 1e-6)
-    for a, b in zip(plan.segments[:-1], plan.segments[1:], strict=True):
-        assert a.lonlat[-1] == b.lonlat[0], "the path is not continuous"
+    assert_continuous(plan)
     kinds = [s.kind for s in plan.segments]
     between_lines = [
         k for k in range(1, len(kinds) - 1) if kinds[k - 1 : k + 2] == ["line", "turn", "line"]

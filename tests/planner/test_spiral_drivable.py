@@ -19,7 +19,12 @@ from planner.types import CoveragePlan
 from planner.vehicles import PRESETS
 from tests.conftest import FIELDS_DIR, field_from_local
 from tests.planner.field_files import shared_feature
-from tests.planner.plan_checks import TOLERANCE_M, plan_vehicle, turn_curvatures
+from tests.planner.plan_checks import (
+    TOLERANCE_M,
+    assert_continuous,
+    plan_vehicle,
+    turn_curvatures,
+)
 
 SETTINGS = settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -58,8 +63,7 @@ def assert_spiral_drivable(plan: CoveragePlan, *, curvature: bool = True) -> Non
             kappa = turn_curvatures(xy) if curvature else np.zeros(0)
             # Waypoints are rounded to 1e-9° (0.1 mm): allow for that on short steps.
             assert (kappa <= 1.0 / radius * 1.02 + 0.02).all(), f"{kind}: {kappa.max():.3f}"
-    for a, b in zip(plan.segments[:-1], plan.segments[1:], strict=True):
-        assert a.lonlat[-1] == b.lonlat[0], "the path is not continuous"
+    assert_continuous(plan)
     # Joins into the next round keep the curvature across the seam, too.
     for (k0, xy0, _), (k1, xy1, _) in zip(segments[:-1], segments[1:], strict=True):
         if curvature and {k0, k1} == {"round", "turn"}:
