@@ -387,7 +387,9 @@ def turning_radius_m(vehicle: Vehicle) -> float:
 _SHAPES_FROM = 16
 
 
-def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -> TurnCurves:
+def vehicle_turns(
+    ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M, shared_shapes: bool = True
+) -> TurnCurves:
     """Plan the turns ``vehicle`` drives between the given ends: the right type per turn.
 
     A vehicle that pivots (``min_turn_radius_m`` 0) takes :func:`pivot_turn`; one with a
@@ -396,10 +398,12 @@ def vehicle_turns(ends: TurnEnds, vehicle: Vehicle, *, step_m: float = STEP_M) -
 
     A turn depends only on where its end is relative to its start (and the two headings):
     along one edge of a field every U-turn is the same, so each distinct shape is planned
-    once, from the origin, and translated to its turns.
+    once, from the origin, and translated to its turns. ``shared_shapes=False`` skips that
+    search for callers whose turns all differ (the candidate moves between cells, each
+    with its own pulls): every turn is planned as its own shape, to the same points.
     """
     n = len(ends)
-    if n < _SHAPES_FROM:  # every turn its own shape
+    if n < _SHAPES_FROM or not shared_shapes:  # every turn its own shape
         zero = np.zeros(n)
         dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
         planned = _forward_turns(dx, dy, ends.yaw0, ends.yaw1, None, ends, vehicle, step_m)

@@ -12,7 +12,16 @@ from hypothesis import strategies as st
 from shapely import Polygon, box
 
 from planner import PRESETS, plan_coverage
-from planner.move_curves import DrivenMoves, drivable_moves, pull_pairs_m
+from planner.move_curves import (
+    _END_POINTS,
+    _SCREEN_STRIDE,
+    PULL_STEPS_R,
+    DrivenMoves,
+    _pull_pairs,
+    _screened_inside,
+    drivable_moves,
+    pull_pairs_m,
+)
 from planner.routing import FieldRouter
 from planner.turns import TurnEnds, vehicle_turns
 from tests.conftest import FIELDS_DIR, field_from_local
@@ -79,6 +88,41 @@ def test_pull_pairs_are_cheapest_first() -> None:
     assert (np.diff(totals) >= 0.0).all()
     assert tuple(pairs[0]) == (0.0, 0.0)
     assert len({tuple(p) for p in pairs.tolist()}) == len(pairs)
+    # Each pair's steps name its two pulls; the kept pairs are not the caller's to change.
+    pairs_m, steps = _pull_pairs(RADIUS_M)
+    assert np.array_equal(pairs_m, np.asarray(PULL_STEPS_R)[steps] * RADIUS_M)
+    pairs[:] = -1.0
+    assert np.array_equal(pull_pairs_m(RADIUS_M), pairs_m)
+
+
+def test_the_point_screen_passes_every_curve_inside_and_tests_its_strided_points() -> None:
+    """A curve that stays inside always passes; one that passes has every point screened inside.
+
+    The screen's points are each curve's first and last few and one in a stride; the test
+    names them afresh, rank by rank, for turns of every length into and out of an L.
+    """
+    router = FieldRouter(Polygon([(0, 0), (60, 0), (60, 30), (30, 30), (30, 60), (0, 60)]))
+    rng = np.random.default_rng(7)
+    count = 400
+    xy = rng.uniform(2.0, 58.0, (count, 4))
+    yaw = rng.uniform(-math.pi, math.pi, (count, 2))
+    turns = vehicle_turns(
+        TurnEnds(xy[:, 0], xy[:, 1], yaw[:, 0], xy[:, 2], xy[:, 3], yaw[:, 1]), SMALL
+    )
+    screened = _screened_inside(turns, router)
+    exact = router.inside_paths([turns.curve(k) for k in range(count)])
+    assert (screened | ~exact).all()
+    for k in range(count):
+        points = turns.curve(k)
+        ranks = np.arange(len(points))
+        named = (
+            (ranks < _END_POINTS)
+            | (ranks >= len(points) - _END_POINTS)
+            | (ranks % _SCREEN_STRIDE == 0)
+        )
+        assert screened[k] == router.holds_points(points[named]).all()
+    # Both ways: curves inside, and curves turned away by the screen.
+    assert exact.any() and not screened.all()
 
 
 def test_a_u_turn_at_the_edge_pulls_both_lines_back_just_enough() -> None:

@@ -15,6 +15,7 @@ import rsplan
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from planner import PRESETS
 from planner.turns import (
     SAGITTA_M,
     STEP_M,
@@ -24,6 +25,7 @@ from planner.turns import (
     dubins_turn_length_m,
     pivot_turn,
     reeds_shepp_turn,
+    vehicle_turns,
 )
 
 coordinate = st.floats(-20.0, 20.0, allow_nan=False)
@@ -160,3 +162,17 @@ def test_lengths_without_sampling_and_a_subset_equal_the_sampled_turns() -> None
     subset = dubins_turn(ends.take(which), radius_m=1.5)
     for k, j in enumerate(which):
         assert np.array_equal(subset.curve(k), together.curve(int(j)))
+
+
+def test_turns_planned_without_shared_shapes_are_the_same_to_the_last_bit() -> None:
+    """``shared_shapes=False`` plans each turn alone: the same points, shapes repeated or not."""
+    rng = np.random.default_rng(11)
+    values = rng.uniform(-10, 10, (6, 40))
+    values[:, 20:30] = values[:, 0:10] + np.array([[5.0], [-3.0], [0.0], [5.0], [-3.0], [0.0]])
+    ends = TurnEnds(*values)  # turns 20-29 are 0-9 moved: shapes the search shares
+    for vehicle in (PRESETS["small_tractor"], PRESETS["hand_tractor"], PRESETS["rover"]):
+        shared = vehicle_turns(ends, vehicle)
+        alone = vehicle_turns(ends, vehicle, shared_shapes=False)
+        assert np.array_equal(alone.offsets, shared.offsets)
+        assert np.array_equal(alone.xy, shared.xy)
+        assert np.array_equal(alone.length_m, shared.length_m)
