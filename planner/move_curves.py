@@ -42,10 +42,10 @@ CORNER_OFFSETS_R = (0.5, 1.0, 1.5)
 _PAIR_BATCHES = (0, 8, 24, 56, len(PULL_STEPS_R) ** 2)
 #: Curves are screened on this many points at either end first (where most leave) ...
 _END_POINTS = 6
-#: ... then on one point in this many (6 m apart), before the exact test. The exact test
-#: decides, so the stride changes no plan, only the time: one in 3 points (1.5 m apart)
-#: turned away 4 % more of the curves that pass this screen, on the 223 real fields with
-#: the small tractor, for four times the point tests.
+#: ... then on one point in this many (up to 6 m apart: points are at most 0.5 m apart),
+#: before the exact test. The exact test decides, so the stride changes no plan, only the
+#: time: of the curves that one in 12 passed, one in 3 turned away a further 4 %, on the
+#: 223 real fields with the small tractor, for four times the point tests.
 _SCREEN_STRIDE = 12
 
 
@@ -91,13 +91,13 @@ def _pull_pairs(radius_m: float) -> tuple[FloatArray, IntArray]:
     """
     steps_m = np.asarray(PULL_STEPS_R) * radius_m
     back, on = np.meshgrid(np.arange(len(steps_m)), np.arange(len(steps_m)), indexing="ij")
-    steps = np.stack([back.ravel(), on.ravel()], axis=1)
-    pairs_m = steps_m[steps]
+    step_ids = np.stack([back.ravel(), on.ravel()], axis=1)
+    pairs_m = steps_m[step_ids]
     order = np.lexsort((pairs_m[:, 0], pairs_m.sum(axis=1)))
-    pairs_m, steps = pairs_m[order], steps[order]
+    pairs_m, step_ids = pairs_m[order], step_ids[order]
     pairs_m.flags.writeable = False
-    steps.flags.writeable = False
-    return pairs_m, steps
+    step_ids.flags.writeable = False
+    return pairs_m, step_ids
 
 
 def drivable_moves(
@@ -133,19 +133,19 @@ def drivable_moves(
     DrivenMoves
     """
     count = len(ends)
-    pairs, pair_steps = _pull_pairs(turning_radius_m(vehicle))
-    within_room = (pairs[None, :, 0] <= back_room_m[:, None] + 1e-9) & (
-        pairs[None, :, 1] <= on_room_m[:, None] + 1e-9
+    pairs_m, pair_steps = _pull_pairs(turning_radius_m(vehicle))
+    within_room = (pairs_m[None, :, 0] <= back_room_m[:, None] + 1e-9) & (
+        pairs_m[None, :, 1] <= on_room_m[:, None] + 1e-9
     )
     curves: list[FloatArray | None] = [None] * count
-    pair_at = np.full(count, len(pairs), dtype=np.int64)  # the pair each found curve costs
+    pair_at = np.full(count, len(pairs_m), dtype=np.int64)  # the pair each found curve costs
     routes: list[FloatArray | None] = [None] * count
     through: list[Chain | None] = [None] * count  # the chain a curve runs through, if any
     for first, stop in zip(_PAIR_BATCHES[:-1], _PAIR_BATCHES[1:], strict=True):
         if first == _PAIR_BATCHES[1]:
             # The moves the cheapest pulls do not serve: their shortest paths, and chains
             # through them, which then bound the pulls the turn is tried at.
-            todo = np.flatnonzero(pair_at == len(pairs))
+            todo = np.flatnonzero(pair_at == len(pairs_m))
             paths = router.paths(
                 np.stack([ends.x0[todo], ends.y0[todo]], axis=1),
                 np.stack([ends.x1[todo], ends.y1[todo]], axis=1),
@@ -167,13 +167,13 @@ def drivable_moves(
         move, pair = todo[move], pair + first  # move-major, each move's pairs in order
         if len(move) == 0:
             continue
-        turns = _distinct_turns(_pulled_ends(ends, move, pairs[pair]), vehicle)
+        turns = _distinct_turns(_pulled_ends(ends, move, pairs_m[pair]), vehicle)
         for t in _first_inside(move, turns, router):
             k = int(move[t])
             curves[k], pair_at[k] = turns.curve(t).copy(), pair[t]
             through[k] = None  # the turn costs less than the chain found
-    found = pair_at < len(pairs)
-    pulls_m = np.where(found[:, None], pairs[np.minimum(pair_at, len(pairs) - 1)], 0.0)
+    found = pair_at < len(pairs_m)
+    pulls_m = np.where(found[:, None], pairs_m[np.minimum(pair_at, len(pairs_m) - 1)], 0.0)
     curves, pulls_m = _refine(ends, curves, pulls_m, through, router, vehicle)
     return DrivenMoves(curves, pulls_m[:, 0], pulls_m[:, 1], routes)
 
@@ -268,20 +268,20 @@ def _chained(
 ) -> tuple[list[FloatArray | None], IntArray, list[Chain | None]]:
     """Find each move's cheapest chain through poses beside its shortest path's corners.
 
-    ``within_room[k, p]``: whether move ``k``'s lines have room for pair ``p`` of the pulls,
-    whose steps in :data:`PULL_STEPS_R` are ``pair_steps[p]`` (back, on). Returns the curves
-    (None where none is found), the index of the pair of pulls each costs (their count where
-    none is found) and the chains they run through. Each offset of :data:`CORNER_OFFSETS_R`
-    is tried in turn on the moves still without a curve. A chain's first leg depends only on
-    the pull-back and its last only on the push-on: each is planned once per step of
-    :data:`PULL_STEPS_R`.
+    ``within_room[k, p]``: whether move ``k``'s lines have room for pair ``p`` of the pulls
+    (:func:`_pull_pairs`), whose steps in :data:`PULL_STEPS_R` are ``pair_steps[p]`` (back,
+    on). Returns the curves (None where none is found), the index of the pair of pulls each
+    costs (``len(pair_steps)`` where none is found) and the chains they run through. Each
+    offset of :data:`CORNER_OFFSETS_R` is tried in turn on the moves still without a curve.
+    A chain's first leg depends only on the pull-back and its last only on the push-on:
+    each is planned once per step of :data:`PULL_STEPS_R`.
     """
     count = len(ends)
     radius = turning_radius_m(vehicle)
     curves: list[FloatArray | None] = [None] * count
     through: list[Chain | None] = [None] * count
     used = np.full(count, len(pair_steps), dtype=np.int64)
-    steps = np.asarray(PULL_STEPS_R) * radius
+    steps_m = np.asarray(PULL_STEPS_R) * radius
     for offset_r in CORNER_OFFSETS_R:
         todo = np.array(
             [k for k in range(count) if curves[k] is None and len(routes[k]) > 2], dtype=np.int64
@@ -293,11 +293,11 @@ def _chained(
         move = np.array([k for k, _ in kept], dtype=np.int64)
         first_pose = np.array([chain[0][0] for _, chain in kept])  # each chain's first pose
         last_pose = np.array([chain[0][-1] for _, chain in kept])  # and its last
-        n, m = len(kept), len(steps)
+        n, m = len(kept), len(steps_m)
         who = np.repeat(np.arange(n), m)
         zero = np.zeros(n * m)
-        start = _pulled_ends(ends, move[who], np.stack([np.tile(steps, n), zero], axis=1))
-        end = _pulled_ends(ends, move[who], np.stack([zero, np.tile(steps, n)], axis=1))
+        start = _pulled_ends(ends, move[who], np.stack([np.tile(steps_m, n), zero], axis=1))
+        end = _pulled_ends(ends, move[who], np.stack([zero, np.tile(steps_m, n)], axis=1))
         a, b = first_pose[who], last_pose[who]
         into = _distinct_turns(
             TurnEnds(start.x0, start.y0, start.yaw0, a[:, 0], a[:, 1], a[:, 2]), vehicle
@@ -383,8 +383,8 @@ def _ends_inside(curves: TurnCurves, router: FieldRouter) -> npt.NDArray[np.bool
 def _distinct_turns(ends: TurnEnds, vehicle: Vehicle) -> TurnCurves:
     """Plan candidate moves' turns (:func:`planner.turns.vehicle_turns`), no shapes shared.
 
-    Candidates all differ (each has its own pulls or poses): looking for shared shapes
-    among them costs time and finds none.
+    Candidates differ (each has its own pulls or poses): looking for shared shapes among
+    them costs time and finds few, if any (planned alone, a shape's points are the same).
     """
     return vehicle_turns(ends, vehicle, shared_shapes=False)
 

@@ -89,10 +89,17 @@ def test_pull_pairs_are_cheapest_first() -> None:
     assert tuple(pairs[0]) == (0.0, 0.0)
     assert len({tuple(p) for p in pairs.tolist()}) == len(pairs)
     # Each pair's steps name its two pulls; the kept pairs are not the caller's to change.
-    pairs_m, steps = _pull_pairs(RADIUS_M)
-    assert np.array_equal(pairs_m, np.asarray(PULL_STEPS_R)[steps] * RADIUS_M)
+    pairs_m, step_ids = _pull_pairs(RADIUS_M)
+    assert np.array_equal(pairs_m, np.asarray(PULL_STEPS_R)[step_ids] * RADIUS_M)
+    assert not pairs_m.flags.writeable and not step_ids.flags.writeable
+    expected = pairs.copy()
     pairs[:] = -1.0
-    assert np.array_equal(pull_pairs_m(RADIUS_M), pairs_m)
+    assert np.array_equal(pull_pairs_m(RADIUS_M), expected)
+
+
+def _end_points(points: np.ndarray) -> np.ndarray:
+    """A curve's first and last :data:`_END_POINTS` points (all of a shorter curve's)."""
+    return np.vstack([points[:_END_POINTS], points[-_END_POINTS:]])
 
 
 def test_the_point_screen_passes_every_curve_inside_and_tests_its_strided_points() -> None:
@@ -114,15 +121,17 @@ def test_the_point_screen_passes_every_curve_inside_and_tests_its_strided_points
     assert (screened | ~exact).all()
     for k in range(count):
         points = turns.curve(k)
-        ranks = np.arange(len(points))
-        named = (
-            (ranks < _END_POINTS)
-            | (ranks >= len(points) - _END_POINTS)
-            | (ranks % _SCREEN_STRIDE == 0)
-        )
-        assert screened[k] == router.holds_points(points[named]).all()
-    # Both ways: curves inside, and curves turned away by the screen.
-    assert exact.any() and not screened.all()
+        strided = points[np.arange(len(points)) % _SCREEN_STRIDE == 0]
+        named = np.vstack([_end_points(points), strided])
+        assert screened[k] == router.holds_points(named).all()
+    # Every stage at work on these turns: curves inside; curves turned away at their ends;
+    # curves whose ends pass but a strided point does not; curves that pass the screen and
+    # fail the exact test.
+    assert exact.any()
+    ends_pass = np.array(
+        [router.holds_points(_end_points(turns.curve(k))).all() for k in range(count)]
+    )
+    assert (~ends_pass).any() and (ends_pass & ~screened).any() and (screened & ~exact).any()
 
 
 def test_a_u_turn_at_the_edge_pulls_both_lines_back_just_enough() -> None:

@@ -9,6 +9,7 @@ the two lengths must agree there.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import rsplan
@@ -168,11 +169,18 @@ def test_turns_planned_without_shared_shapes_are_the_same_to_the_last_bit() -> N
     """``shared_shapes=False`` plans each turn alone: the same points, shapes repeated or not."""
     rng = np.random.default_rng(11)
     values = rng.uniform(-10, 10, (6, 40))
+    # Coordinates on a 1/64 m grid, so that moving turns 0-9 by whole metres keeps their
+    # relative ends to the last bit: turns 20-29 then share 0-9's shapes.
+    values[[0, 1, 3, 4]] = np.round(values[[0, 1, 3, 4]] * 64.0) / 64.0
     values[:, 20:30] = values[:, 0:10] + np.array([[5.0], [-3.0], [0.0], [5.0], [-3.0], [0.0]])
-    ends = TurnEnds(*values)  # turns 20-29 are 0-9 moved: shapes the search shares
-    for vehicle in (PRESETS["small_tractor"], PRESETS["hand_tractor"], PRESETS["rover"]):
+    ends = TurnEnds(*values)
+    dx, dy = ends.x1 - ends.x0, ends.y1 - ends.y0
+    assert np.array_equal(dx[20:30], dx[0:10]) and np.array_equal(dy[20:30], dy[0:10])
+    reversing = replace(PRESETS["small_tractor"], can_reverse=True)  # Reeds–Shepp turns
+    for vehicle in (PRESETS["small_tractor"], PRESETS["hand_tractor"], PRESETS["rover"], reversing):
         shared = vehicle_turns(ends, vehicle)
         alone = vehicle_turns(ends, vehicle, shared_shapes=False)
         assert np.array_equal(alone.offsets, shared.offsets)
         assert np.array_equal(alone.xy, shared.xy)
         assert np.array_equal(alone.length_m, shared.length_m)
+        assert np.array_equal(alone.turn_rad, shared.turn_rad)
