@@ -31,6 +31,7 @@ from bench.bench_fields import DATASETS, INTERVAL_M, load
 from planner import PlannerError, plan_coverage
 from planner.pipeline import LONLAT_DECIMALS
 from planner.projection import field_frame
+from planner.turns import turning_radius_m
 from planner.types import CoveragePlan
 
 #: Points this far along the lines on either side are added to each turn [m].
@@ -153,7 +154,7 @@ def sharp_turns(field: object, vehicle: str, pattern: str = "boustrophedon") -> 
         pattern=pattern,  # type: ignore[arg-type]
     )
     assert plan.vehicle is not None
-    radius = plan.vehicle.min_turn_radius_m or plan.vehicle.track_m / 2.0
+    radius = turning_radius_m(plan.vehicle)
     turns = sharp = 0
     for _, seam in turn_seams(plan, _DRIVEN[pattern]):
         turns += 1

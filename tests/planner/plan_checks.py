@@ -13,6 +13,7 @@ from shapely import LineString
 from bench import move_corners
 from bench.shapes import fixed_heading_figures as fixed_heading_figures
 from planner.projection import field_frame
+from planner.turns import turning_radius_m
 from planner.types import CoveragePlan, Vehicle
 
 TOLERANCE_M = 0.01  # R1: 1 cm
@@ -142,7 +143,7 @@ def assert_turns_drivable(plan: CoveragePlan) -> None:
     only: where no curve is found (:mod:`planner.move_curves`) they are the shortest path
     inside the field, with corners (``python -m bench.move_corners`` counts them)."""
     vehicle = plan_vehicle(plan)
-    radius = vehicle.min_turn_radius_m or vehicle.track_m / 2.0
+    radius = turning_radius_m(vehicle)
     for turn, same_cell in line_to_line_turns(plan):
         step = np.hypot(*np.diff(turn, axis=0).T)
         assert (step <= 0.5 + 1e-3).all(), f"turn points {step.max():.3f} m apart"
@@ -189,7 +190,7 @@ def assert_every_turn_within_the_radius(plan: CoveragePlan) -> None:
     leave its line and join the next where they end and start, heading on.
     """
     vehicle = plan_vehicle(plan)
-    limit = 1.0 / (vehicle.min_turn_radius_m or vehicle.track_m / 2.0) * (1.0 + 1e-6)
+    limit = 1.0 / turning_radius_m(vehicle) * (1.0 + 1e-6)
     assert_continuous(plan)
     kinds = [s.kind for s in plan.segments]
     between_lines = [

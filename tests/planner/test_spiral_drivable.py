@@ -15,6 +15,7 @@ from shapely import LineString, Polygon
 from bench import move_corners
 from planner import parse_field_geojson, plan_coverage, spiral
 from planner.projection import field_frame
+from planner.turns import turning_radius_m
 from planner.types import CoveragePlan
 from planner.vehicles import PRESETS
 from tests.conftest import FIELDS_DIR, field_from_local
@@ -46,7 +47,7 @@ def assert_spiral_drivable(plan: CoveragePlan, *, curvature: bool = True) -> Non
     a round; the body (path buffered by half the width) inside along rounds, turns and lines;
     one continuous path."""
     vehicle = plan_vehicle(plan)
-    radius = vehicle.min_turn_radius_m or vehicle.track_m / 2.0
+    radius = turning_radius_m(vehicle)
     field_local = field_frame(plan.field_lonlat).to_local(plan.field_lonlat)
     grown = field_local.buffer(TOLERANCE_M)
     half = vehicle.width_m / 2.0

@@ -14,6 +14,7 @@ from shapely import Polygon
 from planner import PRESETS, parse_field_geojson, plan_coverage
 from planner.errors import InvalidParameterError
 from planner.projection import field_frame
+from planner.turns import turning_radius_m
 from tests.conftest import field_from_local
 from tests.planner.plan_checks import (
     TOLERANCE_M,
@@ -53,7 +54,7 @@ def plan_or_refused(job: tuple) -> object:
         # Refused only when there is no room: for the headland passes, or anywhere to turn.
         if error.input_name == "vehicle":
             preset = PRESETS[vehicle]
-            radius = preset.min_turn_radius_m or preset.track_m / 2
+            radius = turning_radius_m(preset)
             local = field_frame(field).to_local(field)
             assert local.buffer(-(preset.width_m / 2 + 2 * radius + interval)).is_empty, error
         else:
