@@ -5,7 +5,9 @@ vertices of the exterior and convex vertices of the holes. The graph joins every
 corners that see each other and are tangent there (a path only bends round a corner it wraps);
 lengths come from Dijkstra (``scipy.sparse.csgraph``). A move searches only the corners its
 ellipse bound admits (a few dozen of a field's thousands), and which tangent pairs see each
-other is kept for later moves; :meth:`FieldRouter.distances` builds the whole graph, once.
+other is kept for later moves; :meth:`FieldRouter.distances` builds the whole graph, once,
+and so does a field of a few hundred corners that many moves search (a real field's
+machine area): its moves then test only which corners their ends see.
 Which moves stay inside and which corners see each other is :mod:`planner.visibility`'s.
 """
 
@@ -38,6 +40,19 @@ _FIRST_CORNERS = 32
 #: A pair of corners is left out of a search only if every path through it is this much
 #: longer than one found (the bound's rounding is some 1e-13 m) [m].
 _REACH_SLACK_M = 1e-6
+#: A field of at most this many corners has its whole visibility graph built once it has
+#: searched :data:`_WHOLE_GRAPH_AFTER` moves, and every search then runs over it, with only
+#: what the move's two ends see tested: a real field's machine area has a few hundred
+#: corners and about one edge per corner (germany_2018_2019-47's 724 corners: 20 ms for the
+#: graph and 30 ms for the paths between every two corners; its 252 searches with the small
+#: tractor took 1.6 s over pairs tested query by query, 0.5 s over the whole graph). A larger
+#: field's graph costs too much to build whole (29 s for the 1,999-vertex wavy field's
+#: 19,636 corners, 0.7 s for the 50 holes' 4,800), and its searches test the pairs of the
+#: corners they rank, as do a field's first searches. At 1,024 corners the paths take 12 MB.
+_WHOLE_GRAPH_CORNERS = 1024
+#: ... searches: about what building the whole graph costs (a search over pairs tested query
+#: by query takes 1–6 ms on the real fields, the graph and its paths 10–50 ms).
+_WHOLE_GRAPH_AFTER = 8
 
 
 class FieldRouter:
@@ -65,6 +80,10 @@ class FieldRouter:
         self._visibility: CornerVisibility | None = None
         self._tree: cKDTree | None = None
         self.nodes = np.empty((0, 2))
+        # The shortest paths between every two corners, for the searches of a field of up to
+        # _WHOLE_GRAPH_CORNERS corners, made once it has searched _WHOLE_GRAPH_AFTER moves.
+        self._whole: _WholeGraph | None = None
+        self._searched = 0
 
     def inside(self, starts: FloatArray, ends: FloatArray) -> npt.NDArray[np.bool_]:
         """Whether each straight move ``starts[k] → ends[k]`` stays inside the field.
@@ -180,6 +199,13 @@ class FieldRouter:
         n = len(self.nodes)
         if n == 0:
             return np.stack([a, b])
+        self._searched += 1
+        if (
+            self._whole is None
+            and n <= _WHOLE_GRAPH_CORNERS
+            and self._searched > _WHOLE_GRAPH_AFTER
+        ):
+            self._whole = _WholeGraph(self._corners().graph())
         # A path through corner i is at least |a − i| + |i − b| long (the ellipse bound), so
         # a path of length L is shortest once every corner of bound ≤ L is searched: search
         # the corners of least bound alone, doubling their number until no path is found,
@@ -198,7 +224,10 @@ class FieldRouter:
             # The subsets grow by their far end: see the new corners only.
             see_a = np.concatenate([see_a, self._visible_from(a, subset[len(see_a) :])])
             see_b = np.concatenate([see_b, self._visible_from(b, subset[len(see_b) :])])
-            found = self._subset_path(a, b, subset, see_a, see_b, reach=reach)
+            if self._whole is not None:
+                found = self._whole_path(a, b, subset[see_a], subset[see_b])
+            else:
+                found = self._subset_path(a, b, subset, see_a, see_b, reach=reach)
             if found is not None:
                 need = found[1] + 1e-9
                 reach = need
@@ -297,6 +326,32 @@ class FieldRouter:
         corners = subset[np.asarray(chain[1:-1], dtype=np.int64)]
         return np.vstack([a, self.nodes[corners], b]), distance
 
+    def _whole_path(
+        self, a: FloatArray, b: FloatArray, seen_a: IntArray, seen_b: IntArray
+    ) -> tuple[FloatArray, float] | None:
+        """Shortest path from ``a`` to ``b`` over the whole graph, entered by sight.
+
+        ``seen_a``, ``seen_b``: the corners ``a`` and ``b`` see (of those ranked so far). A
+        path leaves ``a`` for one of them and reaches ``b`` from one, so the search is
+        exact once every corner it could leave ``a`` for or reach ``b`` from is ranked (as
+        :meth:`_subset_path`'s), while the corners between are all the field's
+        (:class:`_WholeGraph`).
+        """
+        assert self._whole is not None
+        if len(seen_a) == 0 or len(seen_b) == 0:
+            return None
+        from_a = np.hypot(*(self.nodes[seen_a] - a).T)
+        to_b = np.hypot(*(self.nodes[seen_b] - b).T)
+        through = from_a[:, None] + self._whole.lengths_m[np.ix_(seen_a, seen_b)] + to_b
+        best = int(np.argmin(through))
+        if not np.isfinite(through.flat[best]):
+            return None
+        first, last = divmod(best, len(seen_b))
+        corners = self._whole.corners_between(int(seen_a[first]), int(seen_b[last]))
+        points = np.vstack([a, self.nodes[corners], b])
+        # Summed leg by leg from a, as a search would: the same length to the last bit.
+        return points, float(np.cumsum(np.hypot(*np.diff(points, axis=0).T))[-1])
+
     def _corners(self) -> CornerVisibility:
         """Return the field's corners and their pairs' visibility, made on first use."""
         if self._visibility is None:
@@ -367,6 +422,31 @@ class FieldRouter:
         # No tangency filter here: a query point on the boundary, a hair off an edge, would
         # fail it against that edge's own corner.
         return self.inside(np.repeat(p[None], len(which), axis=0), self.nodes[which])
+
+
+class _WholeGraph:
+    """Shortest paths between every two corners of a field (its whole visibility graph).
+
+    Parameters
+    ----------
+    graph : csr_matrix
+        :meth:`planner.visibility.CornerVisibility.graph`.
+    """
+
+    def __init__(self, graph: csr_matrix) -> None:
+        lengths_m, previous = shortest_path(
+            graph, method="D", directed=False, return_predecessors=True
+        )
+        #: ``lengths_m[i, j]``: corner i to corner j [m] (inf where no path joins them).
+        self.lengths_m: FloatArray = lengths_m
+        self._previous: npt.NDArray[np.int32] = previous
+
+    def corners_between(self, first: int, last: int) -> IntArray:
+        """Return the corners of the shortest path from corner ``first`` to ``last``, both in."""
+        chain = [last]
+        while chain[-1] != first:
+            chain.append(int(self._previous[first, chain[-1]]))
+        return np.asarray(chain[::-1], dtype=np.int64)
 
 
 #: Subsets up to this many corners share their pair indices (at most 64 sizes, ~1 MB each);

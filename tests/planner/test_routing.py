@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 from unittest import mock
 
@@ -14,12 +15,26 @@ from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import shortest_path  # type: ignore[import-untyped]
 from shapely import LineString, Polygon, box
 
-from planner import visibility
+from planner import routing, visibility
 from planner.routing import GRAZE_M, FieldRouter, path_length
 from tests.planner.random_fields import fields_with_holes
 
 TOLERANCE_M = 0.01
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: How a router searches: over its whole graph (a field of up to _WHOLE_GRAPH_CORNERS corners,
+#: after its first _WHOLE_GRAPH_AFTER searches), or over the pairs of the corners each search
+#: ranks (larger fields, and a field's first searches).
+SEARCHES = ("whole graph", "ranked pairs")
+
+
+def searching(how: str) -> contextlib.AbstractContextManager[object]:
+    """Routers made and searching within this context search ``how`` (:data:`SEARCHES`)."""
+    whole = how == "whole graph"
+    return mock.patch.multiple(
+        routing,
+        _WHOLE_GRAPH_CORNERS=routing._WHOLE_GRAPH_CORNERS if whole else 0,
+        _WHOLE_GRAPH_AFTER=0,
+    )
 
 
 def assert_inside(field: Polygon, path: np.ndarray) -> None:
@@ -160,10 +175,11 @@ def _reflex_corners(field: Polygon) -> np.ndarray:
     return np.concatenate(corners)
 
 
+@pytest.mark.parametrize("how", SEARCHES)
 @SETTINGS
 @given(field=fields_with_holes(), seed=st.integers(0, 2**32 - 1))
 def test_paths_are_as_short_as_a_plain_visibility_graph_over_every_vertex(
-    field: Polygon, seed: int
+    how: str, field: Polygon, seed: int
 ) -> None:
     """No corner pruned (tangency, ellipse bound) that a shortest path needs."""
     rng = np.random.default_rng(seed)
@@ -172,10 +188,13 @@ def test_paths_are_as_short_as_a_plain_visibility_graph_over_every_vertex(
         [np.asarray(r.coords)[:-1] for r in (field.exterior, *field.interiors)]
     )
     queries = list(zip(*[iter(_points_inside(field, rng, 6))] * 2, strict=True))
-    for (a, b), (grazing, exact) in zip(
-        queries, _reference_lengths(field, vertices, queries), strict=True
-    ):
-        assert grazing - 1e-9 <= path_length(router.path(a, b)) <= exact + 1e-9
+    with searching(how):
+        for (a, b), (grazing, exact) in zip(
+            queries, _reference_lengths(field, vertices, queries), strict=True
+        ):
+            assert grazing - 1e-9 <= path_length(router.path(a, b)) <= exact + 1e-9
+    if router._visibility is not None:  # some move was searched
+        assert (router._whole is not None) == (how == "whole graph" and len(router.nodes) > 0)
 
 
 @settings(SETTINGS, max_examples=8)
@@ -204,14 +223,55 @@ def test_paths_on_fields_of_many_corners_are_as_short_as_a_plain_visibility_grap
     far = np.argsort(-np.hypot(*(points[i] - points[j]).T) * blocked, kind="stable")[:3]
     queries = [(tuple(points[i[k]]), tuple(points[j[k]])) for k in far]
     lengths = _reference_lengths(area, corners, queries)
-    # Pair states in a dense matrix (up to 2,048 corners) and in a dict (beyond).
-    for dense in (visibility._DENSE_CORNERS, 0):
-        with mock.patch.object(visibility, "_DENSE_CORNERS", dense):
-            if not dense:
-                router = FieldRouter(area)
+    # Over the whole graph (up to 1,024 corners); over ranked pairs, their states in a dense
+    # matrix (up to 2,048 corners) and in a dict (beyond).
+    for whole, dense in ((True, True), (False, True), (False, False)):
+        with (
+            searching("whole graph" if whole else "ranked pairs"),
+            mock.patch.object(visibility, "_DENSE_CORNERS", 2048 if dense else 0),
+        ):
+            router = FieldRouter(area)
             for (a, b), (grazing, exact) in zip(queries, lengths, strict=True):
                 path = router.path(a, b)
                 assert_inside(area, path)
                 assert grazing - 1e-9 <= path_length(path) <= exact + 1e-9
             corners = router._visibility
-            assert corners is None or (corners._states is None) == (not dense)
+            if corners is not None:  # some move was searched
+                assert (router._whole is not None) == whole
+                assert (corners._states is not None) == (dense and not whole)
+
+
+@SETTINGS
+@given(field=fields_with_holes(), seed=st.integers(0, 2**32 - 1))
+def test_the_whole_graph_finds_the_paths_ranked_pairs_find(field: Polygon, seed: int) -> None:
+    """The two ways of searching take the same paths, to the last bit (ties aside)."""
+    rng = np.random.default_rng(seed)
+    points = np.asarray(_points_inside(field, rng, 8))
+    i, j = np.triu_indices(len(points), k=1)
+    paths = {}
+    for how in SEARCHES:
+        with searching(how):
+            router = FieldRouter(field)
+            paths[how] = router.paths(points[i], points[j])
+    searched = 0
+    for whole, ranked in zip(paths["whole graph"], paths["ranked pairs"], strict=True):
+        searched += len(ranked) > 2
+        if whole.shape != ranked.shape or not np.array_equal(whole, ranked):
+            # Another path only where it ties with the ranked pairs' path.
+            assert path_length(whole) == pytest.approx(path_length(ranked), abs=1e-9)
+    assume(searched > 0)
+
+
+def test_the_whole_graph_is_built_for_a_field_of_few_corners_after_its_first_searches() -> None:
+    """Beyond _WHOLE_GRAPH_CORNERS, or for a few searches, it would cost more than it saves."""
+    hole = shapely.Point(50, 50).buffer(10.0, quad_segs=8)
+    field = Polygon(box(0, 0, 100, 100).exterior, [hole.exterior.coords[::-1]])
+    corners = len(_reflex_corners(field))  # the hole's 32
+    after = routing._WHOLE_GRAPH_AFTER
+    for most_corners, whole in ((corners, True), (corners - 1, False)):
+        with mock.patch.object(routing, "_WHOLE_GRAPH_CORNERS", most_corners):
+            router = FieldRouter(field)
+            for searched in range(1, after + 2):
+                path = router.path((20.0, 50.0 + searched / 10), (80.0, 50.0))
+                assert len(path) > 2  # round the hole: searched
+                assert (router._whole is not None) == (whole and searched > after)
