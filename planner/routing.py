@@ -48,10 +48,11 @@ _REACH_SLACK_M = 1e-6
 #: tractor took 1.6 s over pairs tested query by query, 0.5 s over the whole graph). A larger
 #: field's graph costs too much to build whole (29 s for the 1,999-vertex wavy field's
 #: 19,636 corners, 0.7 s for the 50 holes' 4,800), and its searches test the pairs of the
-#: corners they rank, as do a field's first searches. At 1,024 corners the paths take 12 MB.
+#: corners they rank, as do a field's first searches. The paths take n² × 12 bytes: 12 MiB
+#: at 1,024 corners (4.6 GB at the wavy field's 19,636).
 _WHOLE_GRAPH_CORNERS = 1024
-#: ... searches: about what building the whole graph costs (a search over pairs tested query
-#: by query takes 1–6 ms on the real fields, the graph and its paths 10–50 ms).
+#: Searches over ranked pairs before the whole graph is built: 8 of them, at 1–6 ms each on
+#: the real fields, cost about what the graph and its paths do (10–50 ms).
 _WHOLE_GRAPH_AFTER = 8
 
 
@@ -81,7 +82,7 @@ class FieldRouter:
         self._tree: cKDTree | None = None
         self.nodes = np.empty((0, 2))
         # The shortest paths between every two corners, for the searches of a field of up to
-        # _WHOLE_GRAPH_CORNERS corners, made once it has searched _WHOLE_GRAPH_AFTER moves.
+        # _WHOLE_GRAPH_CORNERS corners, made by the search after its first _WHOLE_GRAPH_AFTER.
         self._whole: _WholeGraph | None = None
         self._searched = 0
 
@@ -195,7 +196,7 @@ class FieldRouter:
                 (float(snapped_b[0]), float(snapped_b[1])),
             )
             return np.vstack([a[None], inner, b[None]])
-        self._corners()
+        corners = self._corners()
         n = len(self.nodes)
         if n == 0:
             return np.stack([a, b])
@@ -205,7 +206,7 @@ class FieldRouter:
             and n <= _WHOLE_GRAPH_CORNERS
             and self._searched > _WHOLE_GRAPH_AFTER
         ):
-            self._whole = _WholeGraph(self._corners().graph())
+            self._whole = _WholeGraph(corners.graph())
         # A path through corner i is at least |a − i| + |i − b| long (the ellipse bound), so
         # a path of length L is shortest once every corner of bound ≤ L is searched: search
         # the corners of least bound alone, doubling their number until no path is found,
@@ -335,16 +336,17 @@ class FieldRouter:
         path leaves ``a`` for one of them and reaches ``b`` from one, so the search is
         exact once every corner it could leave ``a`` for or reach ``b`` from is ranked (as
         :meth:`_subset_path`'s), while the corners between are all the field's
-        (:class:`_WholeGraph`).
+        (:class:`_WholeGraph`). The same length as :meth:`_subset_path`'s path; where two
+        paths tie, perhaps the other one (their lengths are summed in another order).
         """
         assert self._whole is not None
         if len(seen_a) == 0 or len(seen_b) == 0:
             return None
         from_a = np.hypot(*(self.nodes[seen_a] - a).T)
         to_b = np.hypot(*(self.nodes[seen_b] - b).T)
-        through = from_a[:, None] + self._whole.lengths_m[np.ix_(seen_a, seen_b)] + to_b
-        best = int(np.argmin(through))
-        if not np.isfinite(through.flat[best]):
+        through_m = from_a[:, None] + self._whole.lengths_m[np.ix_(seen_a, seen_b)] + to_b
+        best = int(np.argmin(through_m))
+        if not np.isfinite(through_m.flat[best]):
             return None
         first, last = divmod(best, len(seen_b))
         corners = self._whole.corners_between(int(seen_a[first]), int(seen_b[last]))
@@ -445,7 +447,10 @@ class _WholeGraph:
         """Return the corners of the shortest path from corner ``first`` to ``last``, both in."""
         chain = [last]
         while chain[-1] != first:
-            chain.append(int(self._previous[first, chain[-1]]))
+            before = int(self._previous[first, chain[-1]])
+            if before < 0:  # scipy's -9999: no path (the caller asks only for joined corners)
+                raise ValueError(f"no path joins corners {first} and {last}")
+            chain.append(before)
         return np.asarray(chain[::-1], dtype=np.int64)
 
 

@@ -268,10 +268,16 @@ def test_the_whole_graph_is_built_for_a_field_of_few_corners_after_its_first_sea
     field = Polygon(box(0, 0, 100, 100).exterior, [hole.exterior.coords[::-1]])
     corners = len(_reflex_corners(field))  # the hole's 32
     after = routing._WHOLE_GRAPH_AFTER
+    with searching("ranked pairs"):
+        reference = FieldRouter(field)
     for most_corners, whole in ((corners, True), (corners - 1, False)):
         with mock.patch.object(routing, "_WHOLE_GRAPH_CORNERS", most_corners):
             router = FieldRouter(field)
-            for searched in range(1, after + 2):
-                path = router.path((20.0, 50.0 + searched / 10), (80.0, 50.0))
+            for searched in range(1, after + 3):
+                a, b = (20.0, 50.0 + searched / 10), (80.0, 50.0 - searched / 7)
+                path = router.path(a, b)
                 assert len(path) > 2  # round the hole: searched
                 assert (router._whole is not None) == (whole and searched > after)
+                # As production searches: ranked pairs first, then the whole graph.
+                assert np.array_equal(path, reference.path(a, b))
+        assert len(router.nodes) == corners
